@@ -1,0 +1,1 @@
+"""ForaNav host tools: simulator, harness, replay, training, benchmarks, deploy, plots, telemetry."""

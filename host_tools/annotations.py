@@ -1,0 +1,96 @@
+"""Box annotations: the one CSV format for real and rendered data.
+
+Same format as ``shared/data/real/*/boxes.csv``: one row per annotated tree, in pixels of the original image
+(origin top-left, x right, y down, axis-aligned boxes)::
+
+    image,x_center,y_center,width,height,label
+
+``image`` is relative to the CSV's folder. An image with no trees (a pure negative frame) is listed with an
+empty label and zero-size box so that it is still part of the data set.
+"""
+import csv
+import io
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+from host_tools.errors import ForaNavError
+from host_tools import fileio
+
+HEADER = ("image", "x_center", "y_center", "width", "height", "label")
+
+
+@dataclass(frozen=True)
+class Box:
+    image: str  # relative to the CSV's folder
+    x_center: float
+    y_center: float
+    width: float
+    height: float
+    label: str
+
+    @property
+    def is_empty_marker(self):
+        return self.label == ""
+
+    def corners(self):
+        """(x0, y0, x1, y1) in pixels."""
+        return (self.x_center - self.width / 2, self.y_center - self.height / 2,
+                self.x_center + self.width / 2, self.y_center + self.height / 2)
+
+
+def read_boxes(csv_path):
+    """Read a boxes CSV; raises ForaNavError naming the file and row on bad input."""
+    csv_path = Path(csv_path)
+    try:
+        text = csv_path.read_text(encoding="utf-8")
+    except OSError as err:
+        raise ForaNavError("%s: cannot read: %s" % (csv_path, err.strerror or err))
+    rows = list(csv.reader(io.StringIO(text)))
+    if not rows:
+        raise ForaNavError("%s: empty CSV (expected header %s)" % (csv_path, ",".join(HEADER)))
+    if tuple(h.strip() for h in rows[0]) != HEADER:
+        raise ForaNavError("%s: header must be %s" % (csv_path, ",".join(HEADER)))
+    boxes = []
+    for line_no, row in enumerate(rows[1:], start=2):
+        if not row:
+            continue
+        if len(row) != len(HEADER):
+            raise ForaNavError("%s: line %d: expected %d fields, got %d" % (csv_path, line_no, len(HEADER), len(row)))
+        try:
+            values = [float(v) for v in row[1:5]]
+        except ValueError:
+            raise ForaNavError("%s: line %d: box fields must be numbers" % (csv_path, line_no))
+        if not all(math.isfinite(v) for v in values) or values[2] < 0 or values[3] < 0:
+            raise ForaNavError("%s: line %d: box must be finite with non-negative size" % (csv_path, line_no))
+        boxes.append(Box(row[0], *values, row[5].strip()))
+    if not boxes:
+        raise ForaNavError("%s: no rows" % csv_path)
+    return boxes
+
+
+def boxes_by_image(boxes):
+    """{image: [Box, ...]} in first-seen order; images listed only by an empty marker map to []."""
+    out = {}
+    for b in boxes:
+        out.setdefault(b.image, [])
+        if not b.is_empty_marker:
+            out[b.image].append(b)
+    return out
+
+
+def format_boxes(boxes):
+    buf = io.StringIO()
+    writer = csv.writer(buf, lineterminator="\n")
+    writer.writerow(HEADER)
+    for b in boxes:
+        writer.writerow([b.image, _num(b.x_center), _num(b.y_center), _num(b.width), _num(b.height), b.label])
+    return buf.getvalue()
+
+
+def write_boxes(csv_path, boxes):
+    fileio.write_text(csv_path, format_boxes(boxes))
+
+
+def _num(v):
+    return ("%.2f" % v).rstrip("0").rstrip(".") if v != int(v) else str(int(v))

@@ -1,0 +1,22 @@
+"""Benchmarks that print figures: foranav bench {sim,detector} [--json].
+
+sim:      rendered 352x288 camera frames per second on one core (plantation simulator).
+detector: ms per frame and FPS of the tree detector at 352x288, 640x480 and 1280x1024, peak memory, and the
+          speed-up over the per-window reference implementation.
+"""
+import importlib
+
+TARGETS = {
+    "sim": "host_tools.sim.bench",
+    "detector": "host_tools.detection.bench",
+}
+
+
+def add_arguments(parser):
+    parser.add_argument("target", choices=sorted(TARGETS), help="what to benchmark")
+    parser.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
+    parser.add_argument("--seed", type=int, default=0, help="seed of the rendered test frames")
+
+
+def run(args):
+    return importlib.import_module(TARGETS[args.target]).run(args)

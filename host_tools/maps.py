@@ -1,0 +1,245 @@
+"""Map files: the plantation a flight happens in. One definition, with a validating loader.
+
+World frame in metres: x forward along the rows, y left, z up (the Crazyflie convention); yaw in degrees,
+counter-clockwise seen from above.
+
+A map is a JSON object:
+
+    name            str      free text
+    altitude_m      number   flight height above ground (> 0)
+    waypoints       [[x, y], ...]   the flight path F: start and end of each planting column, flown in order (>= 2)
+    trees           [{id, x, y, species, crown_m, target?}, ...]
+    objects         [{kind, x, y, size_m, yaw_deg}, ...]       optional look-alikes: roof, road_cross
+    seed            int      optional: ground texture and per-tree variation (default 0)
+    target_species  str      optional: the species the mission targets (default oil_palm)
+
+``target`` is ground truth for scoring only (the flight app never reads it). When absent it is true iff the
+species is the target species and the tree lies within ``COLUMN_RULE_FACTOR`` x ``crown_m`` of a path segment
+(the paper's planting-column rule).
+
+Bad files raise ForaNavError with one line naming the file and the field, e.g.
+``maps/x.json: trees[2].crown_m: must be a positive number``.
+"""
+import json
+import math
+from dataclasses import dataclass, field, asdict
+from pathlib import Path
+
+from host_tools.errors import ForaNavError
+from host_tools import fileio
+
+SPECIES = ("oil_palm", "coconut", "date_palm", "citrus", "olive")
+OBJECT_KINDS = ("roof", "road_cross")
+COLUMN_RULE_FACTOR = 1.5  # paper: trees farther than 1.5 crown sizes from the path are outside the column
+BUILTIN_DIR = Path(__file__).resolve().parent / "data" / "maps"
+
+
+@dataclass(frozen=True)
+class Tree:
+    id: int
+    x: float
+    y: float
+    species: str
+    crown_m: float
+    target: bool
+
+
+@dataclass(frozen=True)
+class WorldObject:
+    kind: str
+    x: float
+    y: float
+    size_m: float
+    yaw_deg: float = 0.0
+
+
+@dataclass(frozen=True)
+class PlantationMap:
+    name: str
+    altitude_m: float
+    waypoints: tuple  # ((x, y), ...)
+    trees: tuple  # (Tree, ...)
+    objects: tuple = ()
+    seed: int = 0
+    target_species: str = "oil_palm"
+    source: str = field(default="", compare=False)
+
+    @property
+    def targets(self):
+        return tuple(t for t in self.trees if t.target)
+
+    def tree(self, tree_id):
+        for t in self.trees:
+            if t.id == tree_id:
+                return t
+        raise KeyError(tree_id)
+
+
+def distance_to_segment(px, py, ax, ay, bx, by):
+    """Horizontal distance from point p to segment a-b (metres)."""
+    dx, dy = bx - ax, by - ay
+    length2 = dx * dx + dy * dy
+    t = 0.0 if length2 == 0.0 else max(0.0, min(1.0, ((px - ax) * dx + (py - ay) * dy) / length2))
+    return math.hypot(px - (ax + t * dx), py - (ay + t * dy))
+
+
+def distance_to_path(px, py, waypoints):
+    return min(distance_to_segment(px, py, *a, *b) for a, b in zip(waypoints[:-1], waypoints[1:]))
+
+
+def in_planting_column(x, y, crown_m, waypoints):
+    return distance_to_path(x, y, waypoints) <= COLUMN_RULE_FACTOR * crown_m
+
+
+# ----------------------------------------------------------------------------------------------------------
+# Validation
+
+
+class _Checker:
+    def __init__(self, source):
+        self.source = source
+
+    def fail(self, where, message):
+        raise ForaNavError("%s: %s: %s" % (self.source, where, message))
+
+    def number(self, obj, key, where, positive=False, nonnegative=False):
+        if key not in obj:
+            self.fail(where + key, "missing")
+        value = obj[key]
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            self.fail(where + key, "must be a number, got %s" % type(value).__name__)
+        if not math.isfinite(value):
+            self.fail(where + key, "must be finite, got %r" % value)
+        if positive and value <= 0:
+            self.fail(where + key, "must be a positive number, got %r" % value)
+        if nonnegative and value < 0:
+            self.fail(where + key, "must not be negative, got %r" % value)
+        return float(value)
+
+    def integer(self, obj, key, where):
+        value = obj.get(key)
+        if isinstance(value, bool) or not isinstance(value, int):
+            self.fail(where + key, "must be an integer, got %s" % type(value).__name__)
+        return value
+
+    def string(self, obj, key, where, choices=None):
+        if key not in obj:
+            self.fail(where + key, "missing")
+        value = obj[key]
+        if not isinstance(value, str):
+            self.fail(where + key, "must be a string, got %s" % type(value).__name__)
+        if choices is not None and value not in choices:
+            self.fail(where + key, "unknown value %r (expected one of %s)" % (value, ", ".join(choices)))
+        return value
+
+    def fields(self, obj, where, required, optional=()):
+        if not isinstance(obj, dict):
+            self.fail(where.rstrip(".") or "map", "must be an object")
+        for key in obj:
+            if key not in required and key not in optional:
+                self.fail(where + key, "unknown field")
+        for key in required:
+            if key not in obj:
+                self.fail(where + key, "missing")
+
+    def array(self, obj, key, where):
+        value = obj[key]
+        if not isinstance(value, list):
+            self.fail(where + key, "must be an array")
+        return value
+
+
+def map_from_dict(data, source="<map>"):
+    """Validate a decoded JSON object and build a PlantationMap."""
+    c = _Checker(source)
+    c.fields(data, "", ("name", "altitude_m", "waypoints", "trees"),
+             ("objects", "seed", "target_species"))
+    name = c.string(data, "name", "")
+    altitude = c.number(data, "altitude_m", "", positive=True)
+    target_species = c.string(data, "target_species", "", SPECIES) if "target_species" in data else "oil_palm"
+    seed = c.integer(data, "seed", "") if "seed" in data else 0
+
+    raw_wps = c.array(data, "waypoints", "")
+    if len(raw_wps) < 2:
+        c.fail("waypoints", "needs at least 2 waypoints, got %d" % len(raw_wps))
+    waypoints = []
+    for i, wp in enumerate(raw_wps):
+        if not isinstance(wp, list) or len(wp) != 2:
+            c.fail("waypoints[%d]" % i, "must be [x, y]")
+        waypoints.append((c.number({"x": wp[0]}, "x", "waypoints[%d]." % i),
+                          c.number({"y": wp[1]}, "y", "waypoints[%d]." % i)))
+    waypoints = tuple(waypoints)
+
+    trees, seen = [], set()
+    for i, t in enumerate(c.array(data, "trees", "")):
+        where = "trees[%d]." % i
+        c.fields(t, where, ("id", "x", "y", "species", "crown_m"), ("target",))
+        tree_id = c.integer(t, "id", where)
+        if tree_id in seen:
+            c.fail(where + "id", "duplicate id %d" % tree_id)
+        seen.add(tree_id)
+        x, y = c.number(t, "x", where), c.number(t, "y", where)
+        species = c.string(t, "species", where, SPECIES)
+        crown = c.number(t, "crown_m", where, positive=True)
+        if "target" in t:
+            if not isinstance(t["target"], bool):
+                c.fail(where + "target", "must be true or false")
+            target = t["target"]
+        else:
+            target = species == target_species and in_planting_column(x, y, crown, waypoints)
+        trees.append(Tree(tree_id, x, y, species, crown, target))
+
+    objects = []
+    for i, o in enumerate(c.array(data, "objects", "") if "objects" in data else []):
+        where = "objects[%d]." % i
+        c.fields(o, where, ("kind", "x", "y", "size_m"), ("yaw_deg",))
+        objects.append(WorldObject(c.string(o, "kind", where, OBJECT_KINDS), c.number(o, "x", where),
+                                   c.number(o, "y", where), c.number(o, "size_m", where, positive=True),
+                                   c.number(o, "yaw_deg", where) if "yaw_deg" in o else 0.0))
+    return PlantationMap(name, altitude, waypoints, tuple(trees), tuple(objects), seed, target_species, source)
+
+
+def map_to_dict(pmap):
+    """The JSON object of a map (targets written out explicitly)."""
+    data = {"name": pmap.name, "altitude_m": pmap.altitude_m,
+            "waypoints": [list(wp) for wp in pmap.waypoints],
+            "trees": [asdict(t) for t in pmap.trees]}
+    if pmap.objects:
+        data["objects"] = [asdict(o) for o in pmap.objects]
+    data["seed"] = pmap.seed
+    data["target_species"] = pmap.target_species
+    return data
+
+
+def builtin_map_names():
+    return sorted(p.stem for p in BUILTIN_DIR.glob("*.json"))
+
+
+def resolve_map_path(name_or_path):
+    """A path to a map file, or the name of a built-in map (map1, map2, map3, ...)."""
+    path = Path(name_or_path)
+    if path.suffix == "" and not path.exists():
+        candidate = BUILTIN_DIR / (str(name_or_path) + ".json")
+        if candidate.exists():
+            return candidate
+        raise ForaNavError("%s: no such map file or built-in map (built-in: %s)"
+                           % (name_or_path, ", ".join(builtin_map_names())))
+    return path
+
+
+def load_map(name_or_path):
+    """Load and validate a map file (or a built-in map by name)."""
+    path = resolve_map_path(name_or_path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as err:
+        raise ForaNavError("%s: cannot read map file: %s" % (path, err.strerror or err))
+    try:
+        data = json.loads(text, parse_constant=lambda c: float("nan"))
+    except json.JSONDecodeError as err:
+        raise ForaNavError("%s: not valid JSON: %s (line %d)" % (path, err.msg, err.lineno))
+    return map_from_dict(data, str(path))
+
+
+def save_map(pmap, path):
+    fileio.write_json(path, map_to_dict(pmap))
