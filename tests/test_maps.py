@@ -103,3 +103,15 @@ def test_that_the_command_line_rejects_a_bad_map_with_one_line_and_nonzero_exit(
 
 def test_that_builtin_maps_are_listed():
     assert {"map1", "map2", "map3"} <= set(builtin_map_names())
+
+
+def test_that_atomic_writes_leave_a_normal_file_mode(tmp_path):
+    import os
+    from host_tools import fileio
+    old = os.umask(0o022)
+    try:
+        fileio.write_text(tmp_path / "a.txt", "x")
+    finally:
+        os.umask(old)
+    assert (tmp_path / "a.txt").stat().st_mode & 0o777 == 0o644
+    assert [p.name for p in tmp_path.iterdir()] == ["a.txt"]

@@ -1,0 +1,133 @@
+"""Check a deployed camera from a PC: listen to its serial output for a few seconds and say what arrives.
+
+    python -m host_tools.deploy.serial_check /dev/ttyUSB0 [--seconds 10] [--mode 352x288@15]
+
+Wire a 3.3 V USB-serial adapter where the Bolt would be (JeVois white -> adapter RX, black -> GND, red IOREF ->
+the adapter's 3.3 V), power the camera, and run it. It counts T2/N2 detections, frame marks (`MARK STOP`, one per
+processed frame) and other lines (console replies, logs, noise), and compares the frame rate with the deployed
+mode: a module that keeps up delivers the camera's rate; one that cannot is held to a fraction of it, and the
+mode's fps should then be lowered to just below what the module's Timer reports (JeVois' advice).
+
+The summary is a pure function of (time, line) pairs; only `listen` touches the port (pyserial, read-only: it
+sends nothing, since the camera runs every received line as a console command).
+"""
+import argparse
+import collections
+import math
+import sys
+import time
+
+from host_tools.deploy.modes import DEFAULT_MODE_TEXT, format_fps, parse_mode
+from host_tools.errors import ForaNavError
+from jevois_module.ForaNavTrees.foranav_serial import FRAME_STOP, FrameMark, LineAssembler, parse_line
+
+DEFAULT_SECONDS = 10.0
+READ_TIMEOUT_S = 0.1
+# A module keeping up delivers the camera rate up to timing jitter; below this share it is dropping frames.
+KEEPS_UP_SHARE = 0.95
+# Margin under a measured rate when suggesting a mode: the camera then never waits a whole extra frame.
+RATE_MARGIN = 0.97
+END_OF_FRAME = FRAME_STOP.split()[1]  # FrameMark.what of "MARK STOP"
+
+LinkSummary = collections.namedtuple("LinkSummary", "seconds lines detections frames other frame_rate")
+
+
+def summarize(events, seconds):
+    """events: [(t_s, line)] received in `seconds` of listening -> LinkSummary.
+
+    frame_rate comes from the MARK STOP times (frames - 1 intervals), None with fewer than two marks.
+    """
+    detections = frames = other = 0
+    stop_times = []
+    for t_s, line in events:
+        parsed = parse_line(line)
+        if isinstance(parsed, FrameMark):
+            if parsed.what == END_OF_FRAME:
+                frames += 1
+                stop_times.append(t_s)
+        elif parsed is not None:
+            detections += 1
+        else:
+            other += 1
+    rate = None
+    if len(stop_times) >= 2 and stop_times[-1] > stop_times[0]:
+        rate = (len(stop_times) - 1) / (stop_times[-1] - stop_times[0])
+    return LinkSummary(seconds, len(events), detections, frames, other, rate)
+
+
+def suggested_fps(measured_rate):
+    """A camera fps just below a measured processing rate, to 0.1 fps."""
+    return max(0.1, math.floor(measured_rate * RATE_MARGIN * 10) / 10)
+
+
+def verdict(summary, mode):
+    """Lines for the user: what arrived, and whether the module keeps up with the mode's fps."""
+    lines = ["%d lines in %.1f s: %d detections, %d frames, %d other lines"
+             % (summary.lines, summary.seconds, summary.detections, summary.frames, summary.other)]
+    if summary.lines == 0:
+        lines.append("nothing arrived: check the wiring (JeVois white -> RX, GND, IOREF), the baud rate (115200), "
+                     "and that the module streams (headless deploy, or `streamon`)")
+        return lines
+    if summary.frame_rate is None:
+        lines.append("no frame marks (MARK STOP): the frame rate cannot be measured from the link")
+        return lines
+    lines.append("frames arrive at %.1f fps; the mode asks %s fps" % (summary.frame_rate, format_fps(mode.fps)))
+    if summary.frame_rate >= KEEPS_UP_SHARE * mode.fps:
+        lines.append("the module keeps up with the camera")
+    else:
+        lines.append("the module drops frames: redeploy with --mode %dx%d@%s (or just below the fps its Timer "
+                     "reports)" % (mode.width, mode.height, format_fps(suggested_fps(summary.frame_rate))))
+    if summary.other:
+        lines.append("%d lines were not detections or marks (console replies, logs or noise): the flight app "
+                     "ignores them, but `setpar serlog None` keeps logs off the port" % summary.other)
+    return lines
+
+
+def listen(port_url, seconds, baudrate=115200, clock=time.monotonic):
+    """Adapter: [(t_s, line bytes)] read from the port for `seconds` (t_s from the start)."""
+    import serial
+    events = []
+    assembler = LineAssembler()
+    port = serial.serial_for_url(port_url, baudrate=baudrate, timeout=READ_TIMEOUT_S)
+    try:
+        start = clock()
+        while clock() - start < seconds:
+            data = port.read(4096)
+            now = clock() - start
+            events.extend((now, line) for line in assembler.feed(data))
+    finally:
+        port.close()
+    return events
+
+
+def add_arguments(parser):
+    parser.add_argument("port", help="serial port of the USB-serial adapter (e.g. /dev/ttyUSB0, COM3)")
+    parser.add_argument("--seconds", type=float, default=DEFAULT_SECONDS, help="how long to listen")
+    parser.add_argument("--mode", default=DEFAULT_MODE_TEXT, help="the deployed mode (default %(default)s)")
+
+
+def run(args):
+    """Listen, then print the verdict; ForaNavError for a bad mode or a port that cannot be opened."""
+    mode = parse_mode(args.mode)
+    try:
+        events = listen(args.port, args.seconds)
+    except (OSError, ValueError) as err:  # serial.SerialException is an OSError
+        raise ForaNavError("%s: %s" % (args.port, err))
+    for line in verdict(summarize(events, args.seconds), mode):
+        print(line)
+    return 0
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(prog="python -m host_tools.deploy.serial_check", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    add_arguments(parser)
+    try:
+        return run(parser.parse_args(argv))
+    except ForaNavError as err:
+        print("serial_check: error: %s" % err, file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

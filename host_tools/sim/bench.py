@@ -1,0 +1,75 @@
+"""Simulator benchmark: rendered 352x288 camera frames per second on one core.
+
+The orthomosaic of Map 1 is rendered once (timed separately); then frames are rendered at random poses over
+the path at varied yaw, without and with per-frame sensor effects, and in every sensor mode.
+"""
+import json
+import time
+
+import cv2
+import numpy as np
+
+from host_tools.maps import load_map
+from host_tools.sim.camera import SENSOR_MODES, CameraModel, Pose
+from host_tools.sim.world import SENSOR_EFFECTS, World
+
+TARGET_FPS = 500
+MIN_SECONDS = 1.0
+
+
+def measure(world, camera, poses, effects=None, min_seconds=MIN_SECONDS, clock=time.perf_counter):
+    """Frames per second rendering the poses round-robin for at least min_seconds."""
+    rng = np.random.default_rng(0)
+    count, start = 0, clock()
+    while True:
+        for pose in poses:
+            if effects is None:
+                world.render(camera, pose)
+            else:
+                world.render(camera, pose, rng=rng, effects=effects)
+        count += len(poses)
+        elapsed = clock() - start
+        if elapsed >= min_seconds:
+            return count / elapsed
+
+
+def flight_poses(pmap, count=200, seed=0):
+    rng = np.random.default_rng(seed)
+    xs = rng.uniform(0.3, 3.9, count)
+    ys = rng.uniform(-0.6, 0.6, count)
+    yaws = rng.uniform(-180, 180, count)
+    return [Pose(float(x), float(y), pmap.altitude_m, float(a)) for x, y, a in zip(xs, ys, yaws)]
+
+
+def run(args):
+    cv2.setNumThreads(1)
+    pmap = load_map("map1")
+    start = time.perf_counter()
+    world = World.from_map(pmap, seed=getattr(args, "seed", None))
+    build_s = time.perf_counter() - start
+    camera = CameraModel()
+    poses = flight_poses(pmap, seed=getattr(args, "seed", 0) or 0)
+    world.render(camera, poses[0])  # warm-up
+    result = {
+        "frame": "352x288",
+        "threads": 1,
+        "mosaic_build_s": round(build_s, 3),
+        "mosaic_px": list(world.levels[0].shape[:2]),
+        "fps": round(measure(world, camera, poses), 1),
+        "fps_sensor_effects": round(measure(world, camera, poses, SENSOR_EFFECTS), 1),
+        "target_fps": TARGET_FPS,
+    }
+    result["meets_target"] = result["fps"] >= TARGET_FPS
+    result["fps_by_mode"] = {"%dx%d" % mode: round(measure(world, CameraModel(*mode), poses, min_seconds=0.3), 1)
+                             for mode in SENSOR_MODES}
+    if getattr(args, "json", False):
+        print(json.dumps(result))
+    else:
+        print("simulator: 352x288 camera frames on one core (map1)")
+        print("  orthomosaic build       %8.3f s  (%d x %d px)" % (build_s, *world.levels[0].shape[1::-1]))
+        print("  frames/s (no effects)   %8.1f    target >= %d: %s"
+              % (result["fps"], TARGET_FPS, "met" if result["meets_target"] else "NOT met"))
+        print("  frames/s (sensor fx)    %8.1f    (blur, noise, JPEG round trip)" % result["fps_sensor_effects"])
+        for mode, fps in result["fps_by_mode"].items():
+            print("  frames/s %-10s      %8.1f    (no effects)" % (mode, fps))
+    return 0

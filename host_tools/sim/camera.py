@@ -1,0 +1,115 @@
+"""The downward JeVois camera: a nadir pinhole posed by the MAV's (x, y, z, yaw).
+
+Conventions (docs/DESIGN.md): world x forward, y left, z up, yaw counter-clockwise in degrees. Image up (smaller
+v) is body forward, image left (smaller u) is body left. Pixel coordinates are continuous: (0, 0) is the top-left
+corner of the top-left pixel and the principal point is (W/2, H/2). Ground scale: 0.0031 m per pixel per metre
+of height at 352x288, i.e. f = 322.58 px at 352 px width, scaled with the width for other sensor modes.
+"""
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+METRES_PER_PIXEL_PER_METRE_AT_352 = 0.0031  # the paper's flight code
+REFERENCE_WIDTH = 352
+FOCAL_PX_AT_352 = 1.0 / METRES_PER_PIXEL_PER_METRE_AT_352  # 322.58 px
+SENSOR_MODES = ((352, 288), (640, 480), (1280, 1024), (320, 240))  # JeVois-A33 (OV9653); first = default
+
+
+class Pose(NamedTuple):
+    """MAV pose: position in the world frame (metres) and yaw (degrees, counter-clockwise from +x)."""
+    x: float
+    y: float
+    z: float
+    yaw_deg: float = 0.0
+
+
+def sensor_mode(text):
+    """'352x288' -> (352, 288); one of SENSOR_MODES."""
+    try:
+        width, height = (int(v) for v in str(text).lower().split("x"))
+    except ValueError:
+        width = height = None
+    if (width, height) not in SENSOR_MODES:
+        raise ValueError("unknown sensor mode %r (expected one of %s)"
+                         % (text, ", ".join("%dx%d" % m for m in SENSOR_MODES)))
+    return width, height
+
+
+class CameraModel:
+    """Pinhole nadir camera of the JeVois-A33 mounted under the MAV.
+
+    ``mount_offset`` is the camera's position relative to the MAV's estimated position in the body frame
+    (forward, left) metres; the camera's ground point is MAV + R(yaw) * mount_offset.
+    """
+
+    def __init__(self, width=352, height=288, mount_offset=(0.0, 0.0)):
+        if (width, height) not in SENSOR_MODES:
+            raise ValueError("unknown sensor mode %dx%d" % (width, height))
+        self.width = int(width)
+        self.height = int(height)
+        self.mount_offset = (float(mount_offset[0]), float(mount_offset[1]))
+        self.focal_px = FOCAL_PX_AT_352 * self.width / REFERENCE_WIDTH
+
+    def __repr__(self):
+        return "CameraModel(width=%d, height=%d, mount_offset=%r)" % (self.width, self.height, self.mount_offset)
+
+    def to_dict(self):
+        return {"width": self.width, "height": self.height, "focal_px": self.focal_px,
+                "mount_offset": list(self.mount_offset)}
+
+    @classmethod
+    def from_dict(cls, data):
+        return cls(int(data["width"]), int(data["height"]), tuple(data.get("mount_offset", (0.0, 0.0))))
+
+    def metres_per_pixel(self, z):
+        """Ground size of one pixel (metres) seen from height z (metres)."""
+        return z / self.focal_px
+
+    def ground_point(self, pose):
+        """World (x, y) of the camera's nadir: MAV position + R(yaw) * mount offset."""
+        c, s = _cos_sin(pose.yaw_deg)
+        fwd, left = self.mount_offset
+        return pose.x + c * fwd - s * left, pose.y + s * fwd + c * left
+
+    def pixel_to_world(self, pose, u, v):
+        """Ground point (x, y) seen at pixel (u, v); works on scalars and numpy arrays."""
+        scale = pose.z / self.focal_px
+        forward = (self.height / 2.0 - np.asarray(v, dtype=float)) * scale
+        left = (self.width / 2.0 - np.asarray(u, dtype=float)) * scale
+        c, s = _cos_sin(pose.yaw_deg)
+        gx, gy = self.ground_point(pose)
+        return _scalar(gx + c * forward - s * left), _scalar(gy + s * forward + c * left)
+
+    def world_to_pixel(self, pose, x, y):
+        """Pixel (u, v) of the ground point (x, y); works on scalars and numpy arrays."""
+        gx, gy = self.ground_point(pose)
+        dx = np.asarray(x, dtype=float) - gx
+        dy = np.asarray(y, dtype=float) - gy
+        c, s = _cos_sin(pose.yaw_deg)
+        forward = c * dx + s * dy
+        left = -s * dx + c * dy
+        scale = self.focal_px / pose.z
+        return _scalar(self.width / 2.0 - left * scale), _scalar(self.height / 2.0 - forward * scale)
+
+    def pixel_to_world_affine(self, pose):
+        """2x3 matrix A with [x, y] = A @ [u, v, 1] (continuous pixel coordinates)."""
+        scale = pose.z / self.focal_px
+        c, s = _cos_sin(pose.yaw_deg)
+        gx, gy = self.ground_point(pose)
+        # forward = (H/2 - v) * scale, left = (W/2 - u) * scale
+        # x = gx + c*forward - s*left ; y = gy + s*forward + c*left
+        hw, hh = self.width / 2.0, self.height / 2.0
+        return np.array([
+            [s * scale, -c * scale, gx + c * hh * scale - s * hw * scale],
+            [-c * scale, -s * scale, gy + s * hh * scale + c * hw * scale],
+        ])
+
+
+def _cos_sin(yaw_deg):
+    rad = math.radians(yaw_deg)
+    return math.cos(rad), math.sin(rad)
+
+
+def _scalar(value):
+    return float(value) if np.ndim(value) == 0 else value

@@ -1,0 +1,198 @@
+"""Clips: a video that OpenCV reads plus a JSON sidecar with the ground truth of every frame. One definition.
+
+A clip is a folder::
+
+    clip.avi    MJPG video (OpenCV's own AVI writer), BGR frames in order
+    clip.json   the sidecar (below)
+
+The sidecar (``format`` "foranav-clip", ``version`` 1)::
+
+    {"format": "foranav-clip", "version": 1,
+     "video": "clip.avi",                 # file name relative to the folder
+     "fps": 5.0,                          # nominal frame rate of the video
+     "camera": {"width": 352, "height": 288, "focal_px": 322.58, "mount_offset": [0.0, 0.0]},
+     "map": {...} | null,                 # the map file's JSON object (host_tools.maps), null if unknown
+     "source": {...},                     # free-form: how the clip was made (command, seed, speed, ...)
+     "frames": [
+        {"index": 0, "t_s": 0.0,
+         "pose": {"x": 0.3, "y": 0.45, "z": 1.25, "yaw_deg": 0.0},   # MAV pose (world frame)
+         "trees": [{"id": 1, "species": "oil_palm", "target": true,
+                    "u": 176.0, "v": 20.5, "w": 98.1, "h": 98.1, "complete": true,
+                    "x": 0.8, "y": 0.45}],                            # null = no ground truth (real footage)
+         "objects": [{"kind": "roof", "u": ..., "v": ..., "w": ..., "h": ..., "complete": false,
+                      "x": ..., "y": ...}]},                          # optional
+        ...]}
+
+Real footage with a pose log uses the same sidecar: ``trees`` null (or the trees of a surveyed map), ``map``
+null or the surveyed map. Frame ``index`` i is the i-th decoded video frame; ``t_s`` is seconds from the start.
+"""
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import cv2
+
+from host_tools import fileio
+from host_tools.errors import ForaNavError
+from host_tools.sim.camera import CameraModel, Pose
+from host_tools.sim.world import ObjectInView, TreeInView
+
+FORMAT = "foranav-clip"
+VERSION = 1
+SIDECAR_NAME = "clip.json"
+VIDEO_NAME = "clip.avi"
+DEFAULT_QUALITY = 75
+
+
+@dataclass(frozen=True)
+class ClipFrame:
+    index: int
+    t_s: float
+    pose: Pose
+    trees: object  # tuple of TreeInView, or None when the clip has no ground truth
+    objects: tuple = ()
+
+
+@dataclass
+class Clip:
+    directory: Path
+    video: str
+    fps: float
+    camera: CameraModel
+    map: object  # the map's JSON object (dict) or None
+    frames: list  # [ClipFrame]
+    source: dict
+
+    @property
+    def video_path(self):
+        return self.directory / self.video
+
+    def images(self):
+        """Yield the decoded BGR frames in order (OpenCV)."""
+        capture = cv2.VideoCapture(str(self.video_path))
+        if not capture.isOpened():
+            raise ForaNavError("%s: cannot open video" % self.video_path)
+        try:
+            while True:
+                ok, image = capture.read()
+                if not ok:
+                    return
+                yield image
+        finally:
+            capture.release()
+
+    def __len__(self):
+        return len(self.frames)
+
+
+# ---- pure: sidecar records ---------------------------------------------------------------------------------
+
+
+def frame_record(index, t_s, pose, trees, objects=()):
+    """The sidecar object of one frame (trees None = no ground truth)."""
+    record = {"index": int(index), "t_s": round(float(t_s), 6),
+              "pose": {"x": _r(pose.x), "y": _r(pose.y), "z": _r(pose.z), "yaw_deg": _r(pose.yaw_deg)},
+              "trees": None if trees is None else [_tree_record(t) for t in trees]}
+    if objects:
+        record["objects"] = [{"kind": o.kind, "u": _r(o.u), "v": _r(o.v), "w": _r(o.w), "h": _r(o.h),
+                              "complete": bool(o.complete), "x": _r(o.x), "y": _r(o.y)} for o in objects]
+    return record
+
+
+def sidecar(frames_records, camera, fps, map_dict=None, source=None, video=VIDEO_NAME):
+    return {"format": FORMAT, "version": VERSION, "video": video, "fps": float(fps),
+            "camera": camera.to_dict(), "map": map_dict, "source": dict(source or {}), "frames": frames_records}
+
+
+def _tree_record(t):
+    return {"id": t.id, "species": t.species, "target": bool(t.target), "u": _r(t.u), "v": _r(t.v),
+            "w": _r(t.w), "h": _r(t.h), "complete": bool(t.complete), "x": _r(t.x), "y": _r(t.y)}
+
+
+def _r(value):
+    return round(float(value), 4)
+
+
+# ---- adapters: files ---------------------------------------------------------------------------------------
+
+
+def write_clip(out_dir, frames, times_s, camera, fps, map_dict=None, source=None, quality=DEFAULT_QUALITY):
+    """Write frames (world.Frame, any iterable) with their times as a clip folder; returns the frame count.
+
+    The video is written to a temporary file and renamed, then the sidecar: a failed run leaves no clip.
+    """
+    out_dir = Path(out_dir)
+    records = []
+    size = (camera.width, camera.height)
+    with fileio.atomic_path(out_dir / VIDEO_NAME) as tmp:
+        # OpenCV's built-in MJPEG writer: no FFmpeg needed, and the same frames give the same bytes
+        writer = cv2.VideoWriter(str(tmp), cv2.CAP_OPENCV_MJPEG, cv2.VideoWriter_fourcc(*"MJPG"), float(fps), size)
+        if not writer.isOpened():
+            raise ForaNavError("%s: cannot open the MJPG writer" % (out_dir / VIDEO_NAME))
+        writer.set(cv2.VIDEOWRITER_PROP_QUALITY, float(quality))
+        try:
+            for index, (frame, t_s) in enumerate(zip(frames, times_s)):
+                if frame.image.shape[1::-1] != size:
+                    raise ForaNavError("frame %d: size %s differs from the camera's %s"
+                                       % (index, frame.image.shape[1::-1], size))
+                writer.write(frame.image)
+                records.append(frame_record(index, t_s, frame.pose, frame.trees, frame.objects))
+        finally:
+            writer.release()
+        # a folder is a clip only with its sidecar: drop an old one before the new video replaces the old
+        (out_dir / SIDECAR_NAME).unlink(missing_ok=True)
+    fileio.write_json(out_dir / SIDECAR_NAME, sidecar(records, camera, fps, map_dict, source), indent=1)
+    return len(records)
+
+
+def read_clip(directory):
+    """Read a clip folder's sidecar (validated); images are decoded lazily by Clip.images()."""
+    directory = Path(directory)
+    path = directory / SIDECAR_NAME if directory.is_dir() else directory
+    directory = path.parent
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except OSError as err:
+        raise ForaNavError("%s: cannot read clip sidecar: %s" % (path, err.strerror or err))
+    except json.JSONDecodeError as err:
+        raise ForaNavError("%s: not valid JSON: %s (line %d)" % (path, err.msg, err.lineno))
+    return clip_from_dict(data, directory, str(path))
+
+
+def clip_from_dict(data, directory, source_name="<clip>"):
+    def fail(where, message):
+        raise ForaNavError("%s: %s: %s" % (source_name, where, message))
+
+    if not isinstance(data, dict) or data.get("format") != FORMAT:
+        fail("format", "not a %s sidecar" % FORMAT)
+    if data.get("version") != VERSION:
+        fail("version", "unsupported version %r (expected %d)" % (data.get("version"), VERSION))
+    try:
+        camera = CameraModel.from_dict(data["camera"])
+    except (KeyError, TypeError, ValueError) as err:
+        fail("camera", "bad camera: %s" % err)
+    fps = data.get("fps")
+    if isinstance(fps, bool) or not isinstance(fps, (int, float)) or not fps > 0:
+        fail("fps", "must be a positive number")
+    frames = []
+    for i, rec in enumerate(data.get("frames") or []):
+        try:
+            pose = Pose(*(float(rec["pose"][k]) for k in ("x", "y", "z", "yaw_deg")))
+            trees = None if rec.get("trees") is None else tuple(
+                TreeInView(int(t["id"]), str(t["species"]), bool(t["target"]), float(t["u"]), float(t["v"]),
+                           float(t["w"]), float(t["h"]), bool(t["complete"]), float(t.get("x", 0.0)),
+                           float(t.get("y", 0.0))) for t in rec["trees"])
+            objs = tuple(ObjectInView(k, str(o["kind"]), float(o["u"]), float(o["v"]), float(o["w"]), float(o["h"]),
+                                      bool(o["complete"]), float(o.get("x", 0.0)), float(o.get("y", 0.0)))
+                         for k, o in enumerate(rec.get("objects") or ()))
+            frame = ClipFrame(int(rec["index"]), float(rec["t_s"]), pose, trees, objs)
+        except (KeyError, TypeError, ValueError) as err:
+            fail("frames[%d]" % i, "bad frame record (%s)" % (err,))
+        if not all(math.isfinite(v) for v in (frame.t_s,) + tuple(frame.pose)):
+            fail("frames[%d]" % i, "time and pose must be finite")
+        if frame.index != i:
+            fail("frames[%d].index" % i, "expected %d, got %d" % (i, frame.index))
+        frames.append(frame)
+    return Clip(Path(directory), str(data.get("video", VIDEO_NAME)), float(fps), camera, data.get("map"), frames,
+                dict(data.get("source") or {}))

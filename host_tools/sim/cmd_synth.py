@@ -1,0 +1,98 @@
+"""Write a rendered dataset: the paper's positive/negative crops and annotated full frames.
+
+Example: foranav synth --out data/synth --count 400 --seed 1 [--species oil_palm]
+
+Layout of DIR:
+  crops/pos/NNNNN.png    one complete tree of a target species (window 1.15-1.45 x the crown, jittered)
+  crops/neg/NNNNN.png    no complete target tree: look-alike species, roof, road_cross, partial, background
+  crops/crops.csv        image,class,category  (class pos/neg; image relative to crops/)
+  frames/NNNNN.png       352x288 camera frames of random plots
+  frames/boxes.csv       image,x_center,y_center,width,height,label (host_tools/annotations.py): every
+                         complete tree (label = species) and object (roof, road_cross); frames without any are
+                         listed with an empty label
+Same seed, same bytes. --species selects the target species (default oil_palm).
+"""
+import csv
+import io
+import shutil
+import tempfile
+from pathlib import Path
+
+import cv2
+
+from host_tools import fileio
+from host_tools.annotations import Box, format_boxes
+from host_tools.errors import ForaNavError
+from host_tools.maps import SPECIES
+from host_tools.sim.dataset import generate
+
+CROPS_HEADER = ("image", "class", "category")
+
+
+def add_arguments(parser):
+    parser.add_argument("--out", required=True, help="output folder (created; existing crops/ and frames/ replaced)")
+    parser.add_argument("--count", type=int, required=True, help="positive crops (and as many negatives)")
+    parser.add_argument("--frames", type=int, default=None, help="annotated frames (default: --count)")
+    parser.add_argument("--seed", type=int, default=0, help="seed (default 0)")
+    parser.add_argument("--species", nargs="+", choices=SPECIES, default=["oil_palm"],
+                        help="target species (default oil_palm)")
+
+
+def run(args):
+    if args.count < 1:
+        raise ForaNavError("--count: must be at least 1, got %d" % args.count)
+    frame_count = args.count if args.frames is None else args.frames
+    if frame_count < 0:
+        raise ForaNavError("--frames: must not be negative")
+    species = tuple(dict.fromkeys(args.species))
+    positives, negatives, frames = generate(args.seed, args.count, frame_count, species)
+    try:
+        write_into(Path(args.out), positives, negatives, frames)
+    except OSError as err:
+        raise ForaNavError("%s: cannot write the dataset: %s" % (args.out, err.strerror or err))
+    print("wrote %s: %d positive and %d negative crops (target %s), %d frames with %d boxes"
+          % (args.out, len(positives), len(negatives), ", ".join(species), len(frames),
+             sum(len(f.boxes) for f in frames)))
+    return 0
+
+
+def write_into(out, positives, negatives, frames):
+    """Build the dataset in a scratch folder inside ``out``, then swap it in: never half-written."""
+    out.mkdir(parents=True, exist_ok=True)
+    scratch = Path(tempfile.mkdtemp(prefix=".synth.", dir=out))
+    try:
+        write_dataset(scratch, positives, negatives, frames)
+        for part in ("crops", "frames"):
+            if (out / part).exists():
+                shutil.rmtree(out / part)
+            (scratch / part).rename(out / part)
+    finally:
+        shutil.rmtree(scratch, ignore_errors=True)
+
+
+def write_dataset(root, positives, negatives, frames):
+    rows = []
+    for folder, crops in (("pos", positives), ("neg", negatives)):
+        for i, crop in enumerate(crops):
+            name = "%s/%05d.png" % (folder, i)
+            _write_png(root / "crops" / name, crop.image)
+            rows.append((name, folder, crop.category))
+    buf = io.StringIO()
+    writer = csv.writer(buf, lineterminator="\n")
+    writer.writerow(CROPS_HEADER)
+    writer.writerows(rows)
+    fileio.write_text(root / "crops" / "crops.csv", buf.getvalue())
+    boxes = []
+    for i, frame in enumerate(frames):
+        name = "%05d.png" % i
+        _write_png(root / "frames" / name, frame.image)
+        boxes += [Box(name, u, v, w, h, label) for u, v, w, h, label in frame.boxes] or [Box(name, 0, 0, 0, 0, "")]
+    (root / "frames").mkdir(parents=True, exist_ok=True)
+    fileio.write_text(root / "frames" / "boxes.csv", format_boxes(boxes))
+
+
+def _write_png(path, image):
+    ok, data = cv2.imencode(".png", image, [cv2.IMWRITE_PNG_COMPRESSION, 6])
+    if not ok:
+        raise ForaNavError("%s: cannot encode PNG" % path)
+    fileio.write_bytes(path, data.tobytes())
