@@ -28,8 +28,8 @@ paper-tests: $(STAMP)
 	$(BIN)/foranav paper-tests --out runs/paper-tests
 
 deploy: $(STAMP)
-	@test -n "$(SD)" || { echo "usage: make deploy SD=/path/to/JEVOIS"; exit 2; }
-	$(BIN)/foranav deploy --sd "$(SD)"
+	@test -n "$(SD)" || { echo "usage: make deploy SD=/path/to/JEVOIS [DEPLOY_FLAGS=--headless]"; exit 2; }
+	$(BIN)/foranav deploy --sd "$(SD)" $(DEPLOY_FLAGS)
 
 clean:
 	rm -rf $(VENV) runs .pytest_cache

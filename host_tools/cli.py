@@ -27,6 +27,7 @@ COMMANDS = {
     "bench": ("host_tools.cmd_bench", "benchmarks: foranav bench {sim,detector}"),
     "deploy": ("host_tools.deploy.cmd_deploy", "install the camera module on a JeVois microSD card"),
     "package": ("host_tools.deploy.cmd_package", "build a .jvpkg package of the camera module"),
+    "serial-check": ("host_tools.deploy.serial_check", "listen to the camera's serial output and check it"),
 }
 
 

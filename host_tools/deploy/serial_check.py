@@ -1,6 +1,6 @@
 """Check a deployed camera from a PC: listen to its serial output for a few seconds and say what arrives.
 
-    python -m host_tools.deploy.serial_check /dev/ttyUSB0 [--seconds 10] [--mode 352x288@15]
+    foranav serial-check /dev/ttyUSB0 [--seconds 10] [--mode 352x288@15]
 
 Wire a 3.3 V USB-serial adapter where the Bolt would be (JeVois white -> adapter RX, black -> GND, red IOREF ->
 the adapter's 3.3 V), power the camera, and run it. It counts T2/N2 detections, frame marks (`MARK STOP`, one per
