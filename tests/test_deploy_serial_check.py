@@ -64,6 +64,7 @@ def test_that_listen_reads_crlf_lines_from_a_real_port():
 
 
 def test_that_a_port_that_cannot_be_opened_gives_one_line_and_exit_2(capsys, tmp_path):
-    assert serial_check.main([str(tmp_path / "no-such-port"), "--seconds", "0.1"]) == 2
+    from host_tools.cli import main
+    assert main(["serial-check", str(tmp_path / "no-such-port"), "--seconds", "0.1"]) == 2
     err = capsys.readouterr().err
     assert len(err.strip().splitlines()) == 1 and "no-such-port" in err

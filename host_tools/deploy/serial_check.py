@@ -11,7 +11,6 @@ mode's fps should then be lowered to just below what the module's Timer reports 
 The summary is a pure function of (time, line) pairs; only `listen` touches the port (pyserial, read-only: it
 sends nothing, since the camera runs every received line as a console command).
 """
-import argparse
 import collections
 import math
 import sys
@@ -118,16 +117,6 @@ def run(args):
     return 0
 
 
-def main(argv=None):
-    parser = argparse.ArgumentParser(prog="python -m host_tools.deploy.serial_check", description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
-    add_arguments(parser)
-    try:
-        return run(parser.parse_args(argv))
-    except ForaNavError as err:
-        print("serial_check: error: %s" % err, file=sys.stderr)
-        return 2
-
-
 if __name__ == "__main__":
-    sys.exit(main())
+    from host_tools.cli import main
+    sys.exit(main(["serial-check"] + sys.argv[1:]))
