@@ -24,7 +24,7 @@ COMMANDS = {
     "fly": ("host_tools.flight.cmd_fly", "fly a map with the Crazyflie app on the emulated firmware"),
     "paper-tests": ("host_tools.flight.cmd_paper_tests", "run the paper's flight Tests 1-9"),
     "replay": ("host_tools.flight.cmd_replay", "replay a recorded clip through both halves"),
-    "bench": ("host_tools.cmd_bench", "benchmarks: foranav bench {sim,detector}"),
+    "bench": ("host_tools.cmd_bench", "benchmarks: foranav bench {sim,detector,flight}"),
     "deploy": ("host_tools.deploy.cmd_deploy", "install the camera module on a JeVois microSD card"),
     "package": ("host_tools.deploy.cmd_package", "build a .jvpkg package of the camera module"),
     "serial-check": ("host_tools.deploy.serial_check", "listen to the camera's serial output and check it"),

@@ -1,6 +1,7 @@
-"""Benchmarks that print figures: foranav bench {sim,detector} [--json].
+"""Benchmarks that print figures: foranav bench {sim,detector,flight} [--json].
 
 sim:      rendered 352x288 camera frames per second on one core (plantation simulator).
+flight:   simulated seconds per CPU second of an oracle flight (firmware emulation + app).
 detector: ms per frame and FPS of the tree detector at 352x288, 640x480 and 1280x1024, peak memory, and the
           speed-up over the per-window reference implementation.
 """
@@ -9,6 +10,7 @@ import importlib
 TARGETS = {
     "sim": "host_tools.sim.bench",
     "detector": "host_tools.detection.bench",
+    "flight": "host_tools.flight.bench",
 }
 
 

@@ -1,0 +1,216 @@
+"""log.c / param_logic.c: variables addressed by ``group.name`` with firmware-like integer ids.
+
+``log_get_var_id(group, name)`` returns a small integer, or LOG_VARID_INVALID (0xFFFF) for an unknown name,
+exactly like logGetVarId; reading through an invalid id is a firmware ASSERT, here FirmwareAssertError.
+``param_get_var_id`` returns a ParamVarId(id, index) whose id is 0xFFFF when unknown; paramGet*/paramSet*
+assert validity and type, and writes to read-only params assert too. Values are live: a read calls the
+variable's getter (no snapshot), as the firmware reads the variable's address.
+
+Tables are declared like the C macros (``LOG_GROUP_START(app) LOG_ADD(LOG_FLOAT, x, &x)``)::
+
+    LOG_TABLE = log_group("app", [log_add(LOG_UINT8, "phase", "phase", "", "app phase")])
+    PARAM_TABLE = param_group("app", [param_add(PARAM_FLOAT, "altitude", "altitude_m", "m", "flight height")])
+
+where the third field names the attribute of the owning object (the C ``&variable``).
+"""
+from collections import namedtuple
+
+LOG_VARID_INVALID = 0xFFFF
+PARAM_VARID_INVALID = 0xFFFF
+
+LOG_UINT8, LOG_UINT16, LOG_UINT32, LOG_INT8, LOG_INT16, LOG_INT32, LOG_FLOAT = (
+    "uint8_t", "uint16_t", "uint32_t", "int8_t", "int16_t", "int32_t", "float")
+PARAM_UINT8, PARAM_UINT16, PARAM_UINT32, PARAM_INT8, PARAM_INT16, PARAM_INT32, PARAM_FLOAT = (
+    LOG_UINT8, LOG_UINT16, LOG_UINT32, LOG_INT8, LOG_INT16, LOG_INT32, LOG_FLOAT)
+_INTEGER_TYPES = (LOG_UINT8, LOG_UINT16, LOG_UINT32, LOG_INT8, LOG_INT16, LOG_INT32)
+_INTEGER_RANGES = {"uint8_t": (0, 255), "uint16_t": (0, 65535), "uint32_t": (0, 2 ** 32 - 1),
+                   "int8_t": (-128, 127), "int16_t": (-32768, 32767), "int32_t": (-2 ** 31, 2 ** 31 - 1)}
+
+ParamVarId = namedtuple("ParamVarId", "id index")
+Entry = namedtuple("Entry", "type name attribute unit doc read_only")
+Group = namedtuple("Group", "group entries")
+
+
+class FirmwareAssertError(AssertionError):
+    """A failed firmware ASSERT (on the MAV: halt, LED pattern, 'assert failed' on the console)."""
+
+
+def log_add(var_type, name, attribute, unit="", doc=""):
+    return Entry(var_type, name, attribute, unit, doc, True)
+
+
+def param_add(var_type, name, attribute, unit="", doc="", read_only=False):
+    return Entry(var_type, name, attribute, unit, doc, read_only)
+
+
+def log_group(group, entries):
+    return Group(group, tuple(entries))
+
+
+def param_group(group, entries):
+    return Group(group, tuple(entries))
+
+
+class _Variable(object):
+    __slots__ = ("group", "entry", "owner")
+
+    def __init__(self, group, entry, owner):
+        self.group, self.entry, self.owner = group, entry, owner
+
+    @property
+    def full_name(self):
+        return "%s.%s" % (self.group, self.entry.name)
+
+    def get(self):
+        value = getattr(self.owner, self.entry.attribute)
+        if self.entry.type in _INTEGER_TYPES:
+            return int(value)
+        return float(value)
+
+    def set(self, value):
+        if self.entry.type in _INTEGER_TYPES:
+            low, high = _INTEGER_RANGES[self.entry.type]
+            value = int(value)
+            if not low <= value <= high:
+                raise FirmwareAssertError("param %s: %d out of range for %s" % (self.full_name, value,
+                                                                                   self.entry.type))
+        setattr(self.owner, self.entry.attribute, value)
+
+
+class LogParamRegistry(object):
+    """The log and param tables of one firmware image, in registration order (ids are table indices)."""
+
+    def __init__(self):
+        self._logs = []
+        self._params = []
+        self._log_index = {}
+        self._param_index = {}
+
+    # -- registration (what the LOG_GROUP/PARAM_GROUP macros do at link time) -----------------------------
+
+    def register_log_group(self, table, owner):
+        self._register(table, owner, self._logs, self._log_index)
+
+    def register_param_group(self, table, owner):
+        self._register(table, owner, self._params, self._param_index)
+
+    @staticmethod
+    def _register(table, owner, variables, index):
+        for entry in table.entries:
+            key = (table.group, entry.name)
+            if key in index:
+                raise ValueError("%s.%s declared twice" % key)
+            if not hasattr(owner, entry.attribute):
+                raise ValueError("%s.%s: owner has no attribute %r" % (table.group, entry.name, entry.attribute))
+            index[key] = len(variables)
+            variables.append(_Variable(table.group, entry, owner))
+
+    # -- log API (log.h) ---------------------------------------------------------------------------------
+
+    def log_get_var_id(self, group, name):
+        return self._log_index.get((group, name), LOG_VARID_INVALID)
+
+    def log_var_id_is_valid(self, var_id):
+        return var_id != LOG_VARID_INVALID
+
+    def _log_variable(self, var_id, caller):
+        if not (isinstance(var_id, int) and 0 <= var_id < len(self._logs)):
+            raise FirmwareAssertError("%s: invalid log id 0x%04X" % (caller, var_id & 0xFFFF
+                                                                      if isinstance(var_id, int) else 0xFFFF))
+        return self._logs[var_id]
+
+    def log_get_float(self, var_id):
+        return float(self._log_variable(var_id, "logGetFloat").get())
+
+    def log_get_int(self, var_id):
+        return int(self._log_variable(var_id, "logGetInt").get())
+
+    def log_get_uint(self, var_id):
+        return int(self._log_variable(var_id, "logGetUint").get()) & 0xFFFFFFFF
+
+    def log_get_type(self, var_id):
+        return self._log_variable(var_id, "logGetType").entry.type
+
+    def log_get_group_and_name(self, var_id):
+        v = self._log_variable(var_id, "logGetGroupAndName")
+        return v.group, v.entry.name
+
+    # -- param API (param_logic.h) -----------------------------------------------------------------------
+
+    def param_get_var_id(self, group, name):
+        index = self._param_index.get((group, name))
+        return ParamVarId(PARAM_VARID_INVALID, 0) if index is None else ParamVarId(index, index)
+
+    def _param_variable(self, var_id, caller):
+        if not isinstance(var_id, ParamVarId) or var_id.id == PARAM_VARID_INVALID \
+                or not 0 <= var_id.id < len(self._params):
+            raise FirmwareAssertError("%s: invalid param id %r" % (caller, var_id))
+        return self._params[var_id.id]
+
+    def param_get_int(self, var_id):
+        v = self._param_variable(var_id, "paramGetInt")
+        if v.entry.type not in _INTEGER_TYPES:
+            raise FirmwareAssertError("paramGetInt: %s is a %s" % (v.full_name, v.entry.type))
+        return int(v.get())
+
+    def param_get_uint(self, var_id):
+        return self.param_get_int(var_id) & 0xFFFFFFFF
+
+    def param_get_float(self, var_id):
+        v = self._param_variable(var_id, "paramGetFloat")
+        if v.entry.type != PARAM_FLOAT:
+            raise FirmwareAssertError("paramGetFloat: %s is a %s" % (v.full_name, v.entry.type))
+        return float(v.get())
+
+    def _param_writable(self, var_id, caller):
+        v = self._param_variable(var_id, caller)
+        if v.entry.read_only:
+            raise FirmwareAssertError("%s: %s is read-only" % (caller, v.full_name))
+        return v
+
+    def param_set_int(self, var_id, value):
+        v = self._param_writable(var_id, "paramSetInt")
+        if v.entry.type not in _INTEGER_TYPES:
+            raise FirmwareAssertError("paramSetInt: %s is a %s" % (v.full_name, v.entry.type))
+        v.set(value)
+
+    def param_set_float(self, var_id, value):
+        v = self._param_writable(var_id, "paramSetFloat")
+        if v.entry.type != PARAM_FLOAT:
+            raise FirmwareAssertError("paramSetFloat: %s is a %s" % (v.full_name, v.entry.type))
+        v.set(float(value))
+
+    # -- by full name, for clients and the harness (cflib's 'group.name' strings) ------------------------
+
+    def log_read(self, full_name):
+        """Read a log variable by 'group.name'; unknown names fail loudly (KeyError naming the variable)."""
+        group, _, name = full_name.partition(".")
+        var_id = self.log_get_var_id(group, name)
+        if var_id == LOG_VARID_INVALID:
+            raise KeyError("no log variable %r" % full_name)
+        return self._logs[var_id].get()
+
+    def param_set(self, full_name, value):
+        """Set a param by 'group.name' (as a client does over the radio); unknown names fail loudly."""
+        group, _, name = full_name.partition(".")
+        var_id = self.param_get_var_id(group, name)
+        if var_id.id == PARAM_VARID_INVALID:
+            raise KeyError("no parameter %r" % full_name)
+        v = self._params[var_id.id]
+        if v.entry.type == PARAM_FLOAT:
+            self.param_set_float(var_id, value)
+        else:
+            self.param_set_int(var_id, value)
+
+    def param_read(self, full_name):
+        group, _, name = full_name.partition(".")
+        var_id = self.param_get_var_id(group, name)
+        if var_id.id == PARAM_VARID_INVALID:
+            raise KeyError("no parameter %r" % full_name)
+        return self._params[var_id.id].get()
+
+    def log_names(self):
+        return [v.full_name for v in self._logs]
+
+    def param_entries(self):
+        return [(v.full_name, v.entry) for v in self._params]

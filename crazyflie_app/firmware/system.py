@@ -1,0 +1,164 @@
+"""The emulated Crazyflie: scheduler, commander, supervisor, stabilizer task, estimate, log/param, console.
+
+``Crazyflie(seed=..., model_config=..., decks=...)`` boots the services an app needs; ``x_task_create`` adds
+app tasks; ``run_until(tick)`` advances the whole system. The stabilizer task (priority 5, the highest) runs
+at the 100 Hz position-loop rate and additionally wakes on the exact tick of any watchdog threshold, so
+level-out and lock happen when the firmware would, without stepping Python at 1 kHz.
+"""
+from crazyflie_app.firmware import freertos
+from crazyflie_app.firmware.commander import Commander
+from crazyflie_app.firmware.logparam import (LOG_FLOAT, LOG_UINT8, PARAM_UINT8, LogParamRegistry, log_add,
+                                              log_group, param_add, param_group)
+from crazyflie_app.firmware.mav_model import MavModel
+from crazyflie_app.firmware.supervisor import SUPERVISOR_STATES, Supervisor
+
+STABILIZER_TASK_PRI = 5
+POSITION_RATE_HZ = 100  # RATE_100_HZ: the position controller's rate
+STABILIZER_PERIOD_MS = 1000 // POSITION_RATE_HZ
+
+STATE_ESTIMATE_LOG = log_group("stateEstimate", [
+    log_add(LOG_FLOAT, "x", "x", "m", "estimated position, global frame"),
+    log_add(LOG_FLOAT, "y", "y", "m", "estimated position, global frame"),
+    log_add(LOG_FLOAT, "z", "z", "m", "estimated height"),
+    log_add(LOG_FLOAT, "vx", "vx", "m/s", "estimated velocity, global frame"),
+    log_add(LOG_FLOAT, "vy", "vy", "m/s", "estimated velocity, global frame"),
+    log_add(LOG_FLOAT, "vz", "vz", "m/s", "estimated vertical velocity"),
+    log_add(LOG_FLOAT, "yaw", "yaw", "deg", "estimated yaw, counter-clockwise"),
+])
+SUPERVISOR_LOG = log_group("supervisor", [
+    log_add(LOG_UINT8, "info", "state_index", "", "supervisor state: " + ", ".join(
+        "%d %s" % (i, s) for i, s in enumerate(SUPERVISOR_STATES))),
+])
+DECK_PARAM = param_group("deck", [
+    param_add(PARAM_UINT8, "bcFlow2", "bcFlow2", "", "nonzero if the Flow deck v2 is attached", True),
+    param_add(PARAM_UINT8, "bcLoco", "bcLoco", "", "nonzero if the Loco Positioning deck is attached", True),
+])
+
+
+class _Decks(object):
+    def __init__(self, decks):
+        self.bcFlow2 = 1 if "bcFlow2" in decks else 0
+        self.bcLoco = 1 if "bcLoco" in decks else 0
+
+
+class _SupervisorInfo(object):
+    def __init__(self, supervisor):
+        self._supervisor = supervisor
+
+    @property
+    def state_index(self):
+        return SUPERVISOR_STATES.index(self._supervisor.state)
+
+
+class Console(object):
+    """DEBUG_PRINT and eventTrigger: kept lines plus listeners (telemetry taps)."""
+
+    def __init__(self, clock, max_lines=1000):
+        self._clock = clock
+        self.lines = []  # (tick, module, text), the newest max_lines
+        self._max_lines = max_lines
+        self.listeners = []  # callables(tick, module, text)
+        self.event_listeners = []  # callables(tick, name, payload dict)
+
+    def debug_print(self, module, text):
+        tick = self._clock.x_task_get_tick_count()
+        self.lines.append((tick, module, text))
+        if len(self.lines) > self._max_lines:
+            del self.lines[0]
+        for listener in self.listeners:
+            listener(tick, module, text)
+
+    def event_trigger(self, name, **payload):
+        tick = self._clock.x_task_get_tick_count()
+        for listener in self.event_listeners:
+            listener(tick, name, payload)
+
+
+class Crazyflie(object):
+    """One emulated flight controller. Firmware calls are methods with the firmware's snake_case names."""
+
+    def __init__(self, seed=0, model_config=None, decks=("bcFlow2", "bcLoco"), start=(0.0, 0.0, 0.0)):
+        self.scheduler = freertos.Scheduler()
+        self.commander = Commander(self.scheduler)
+        self.supervisor = Supervisor()
+        self.model = MavModel(model_config, seed=seed, start=start)
+        self.registry = LogParamRegistry()
+        self.console = Console(self.scheduler)
+        self.decks = _Decks(decks)
+        self.registry.register_log_group(STATE_ESTIMATE_LOG, self.model.estimate)
+        self.registry.register_log_group(SUPERVISOR_LOG, _SupervisorInfo(self.supervisor))
+        self.registry.register_param_group(DECK_PARAM, self.decks)
+        self._last_physics_tick = 0
+        self._active_setpoint = self.commander.commander_get_setpoint()
+        self._motors_on = False
+        self.scheduler.x_task_create(self._stabilizer_task(), "STABILIZER", STABILIZER_TASK_PRI)
+
+    # -- FreeRTOS -----------------------------------------------------------------------------------------
+
+    def x_task_get_tick_count(self):
+        return self.scheduler.x_task_get_tick_count()
+
+    def x_task_create(self, generator, name, priority):
+        self.scheduler.x_task_create(generator, name, priority)
+
+    def run_until(self, tick):
+        return self.scheduler.run_until(tick)
+
+    # -- commander ----------------------------------------------------------------------------------------
+
+    def commander_set_setpoint(self, sp, priority):
+        return self.commander.commander_set_setpoint(sp, priority)
+
+    def commander_relax_priority(self):
+        self.commander.commander_relax_priority()
+
+    def commander_get_inactivity_time(self):
+        return self.commander.commander_get_inactivity_time()
+
+    # -- log / param / console ----------------------------------------------------------------------------
+
+    def log_get_var_id(self, group, name):
+        return self.registry.log_get_var_id(group, name)
+
+    def log_get_float(self, var_id):
+        return self.registry.log_get_float(var_id)
+
+    def log_get_uint(self, var_id):
+        return self.registry.log_get_uint(var_id)
+
+    def param_get_var_id(self, group, name):
+        return self.registry.param_get_var_id(group, name)
+
+    def param_get_uint(self, var_id):
+        return self.registry.param_get_uint(var_id)
+
+    def param_get_float(self, var_id):
+        return self.registry.param_get_float(var_id)
+
+    def debug_print(self, module, text):
+        self.console.debug_print(module, text)
+
+    def event_trigger(self, name, **payload):
+        self.console.event_trigger(name, **payload)
+
+    # -- the stabilizer -----------------------------------------------------------------------------------
+
+    def _stabilizer_task(self):
+        """commanderGetSetpoint -> supervisorUpdate -> override -> controller + plant, every 10 ms or on a
+        watchdog threshold, whichever comes first."""
+        while True:
+            now = self.scheduler.x_task_get_tick_count()
+            dt = (now - self._last_physics_tick) / 1000.0
+            self._last_physics_tick = now
+            setpoint = self.commander.commander_get_setpoint()
+            # the plant ran under the previous state up to now; then the supervisor looks at the new age
+            self.model.step(dt, self._active_setpoint, self._motors_on)
+            self.supervisor.supervisor_update(now, setpoint)
+            self._active_setpoint = self.supervisor.supervisor_override_setpoint(setpoint)
+            self._motors_on = self.supervisor.motors_running(setpoint)
+            delay = STABILIZER_PERIOD_MS
+            event = self.supervisor.next_event_tick(now, setpoint)
+            if event is not None:
+                delay = min(delay, event - now)
+            yield freertos.v_task_delay(delay)
+

@@ -1,0 +1,325 @@
+"""The ForaNav Bolt navigation app (a port of ``Navigation/Navigation.c``) on the emulated firmware.
+
+The algorithm lives in the pure core (``navigation_core.NavigationCore``, with ``pixel_kalman`` and
+``tree_memory``); this module is the thin firmware layer around it, shaped like the C app: ``app_main`` waits
+for the system, checks the decks, then loops every 10 ms reading ``stateEstimate.*``, stepping the core and
+sending its setpoint at ``COMMANDER_PRIORITY_EXTRX``; ``camera_task`` reads the JeVois lines from the serial
+link and hands each frame's detections to the core. PARAM and LOG tables are declared at the bottom.
+
+C -> Python names (Navigation.c -> here)::
+
+    appMain()                          NavigationApp.app_main()  (a task generator)
+    setHoverSetpoint(sp, vx, vy, z, yaw)
+                                       set_hover_setpoint(sp, vx, vy, z, yaw)  (body velocity, abs z and yaw)
+    memset(&setpoint, 0, ...)          set_null_setpoint(sp)  (motors off)
+    cpxPacketCallback(cpxRx)           NavigationApp.camera_task() + on_camera_line(line)  (text over UART)
+    is_at_target_mainroad()            NavigationCore._waypoint_reached() / _follow_velocity()
+    drone_speed() / drone_speed2()     NavigationCore._follow_velocity() / navigation_core.servo_velocity()
+    Move_to_TreeTop()                  NavigationCore._step_approach()  (non-blocking, one tick per call)
+    is_at_target() (0.7 m switch)      NavigationCore._step_approach() -> _start_recovery()  (app.recoveryDist)
+    kalmanFilterInit/Predict/Update()  pixel_kalman.PixelKalmanFilter(), .predict(dt_s), .update(u, v)
+    trees[], numTrees                  tree_memory.TreeMemory.trees  (dict by stable id), LOG app.numTrees
+    treeBlacklist[]                    tree_memory.TreeMemory.visited  (bounded), LOG app.numVisited
+    removeCoordinate()                 TreeMemory.mark_visited()
+    logGetVarId() + logGetFloat()      ids resolved once in app_main, read with log_get_float()
+    paramGetUint(deck.bcFlow2)         the same, plus deck.bcLoco (a warning: without it the estimate drifts)
+    DEBUG_PRINT(...)                   Crazyflie.debug_print(DEBUG_MODULE, ...)
+
+The C app's known weaknesses and what this port does about each (tests named in brackets):
+
+* **Out-of-bounds covariance terms** (``P`` is ``float[2][2]`` but ``P[2][2]``, ``P[3][3]`` are used): the filter
+  keeps the full 4x4 covariance of ``[u, v, du, dv]`` with a Joseph-form update, so P stays symmetric
+  positive definite [test_cf_kalman: the covariance is the full 4x4 matrix ...].
+* **Filter on a wrong time base** (dt = 0.001 per 10 ms loop): the filter is predicted every control tick
+  with the tick's real duration in seconds, and detections are shifted by the MAV's motion since capture
+  [test_cf_kalman: prediction runs in real seconds ...].
+* **Dead return-to-path branch** (``checkReturnToPath`` could only ever be true): RETURN_TO_PATH is a real
+  phase entered after every tree, left when the cross-track error is below ``returnTol``
+  [test_cf_core: return to path runs after a tree ...].
+* **Stale target index after removal** (``KalmantreeNum`` indexed an array that ``removeCoordinate``
+  shifted): trees are keyed by stable ids; removing or evicting a tree never retargets another one
+  [test_cf_tree_memory: ids stay valid ...; test_cf_core: the target survives the removal ...].
+* **Unbounded visited list** (``treeBlacklist[10]`` overflowed on the 11th tree) and the silent 10-tree cap:
+  both collections have PARAM capacities; overflow evicts the farthest entry and is counted in LOG
+  variables (``app.evicted``, ``app.forgotten``) and printed, never silent [test_cf_tree_memory: the
+  visited list is bounded ...; a full memory evicts the farthest tree ...].
+
+Also changed from the C app: ids of log/param variables are looked up once, not on every call;
+``deck.bcLoco`` is checked; the camera input task never sleeps 100 ms inside the callback; tree positions
+use the estimate at *capture* time (``camLatency``); serial text lines (JeVois standardized ``T2``/``N2``)
+replace the CPX bytes, so the 255-column byte limit of the C protocol is gone.
+"""
+import math
+
+from jevois_module.ForaNavTrees import foranav_serial
+from crazyflie_app.firmware.commander import (COMMANDER_PRIORITY_EXTRX, modeAbs, modeVelocity, setpoint_t)
+from crazyflie_app.firmware.freertos import m2t, v_task_delay, PORT_MAX_DELAY
+from crazyflie_app.firmware.logparam import (LOG_FLOAT, LOG_UINT8, LOG_UINT16, LOG_UINT32, LOG_VARID_INVALID,
+                                              PARAM_FLOAT, PARAM_UINT8, PARAM_UINT16, PARAM_UINT32,
+                                              PARAM_VARID_INVALID, log_add, log_group, param_add, param_group)
+from crazyflie_app.navigation_core import (PHASE_DONE, Detection, NavigationCore, NavigationParams, Pose)
+from crazyflie_app.serial_link import SerialLink
+
+DEBUG_MODULE = "FORANAV"
+APP_TASK_PRI = 1  # CONFIG_APP_PRIORITY of the NAV-family builds
+CAMERA_TASK_PRI = 1
+APP_PERIOD_MS = 10  # the C main loop: vTaskDelay(M2T(10))
+CAMERA_TASK_PERIOD_MS = 10  # serial polling period; reading never blocks
+BOOT_DELAY_MS = 2000  # Navigation.c: wait 2 s, then check the decks
+PRE_TAKEOFF_DELAY_MS = 3000  # Navigation.c: wait 3 s more before take-off
+
+
+def set_hover_setpoint(sp, vx, vy, z, yaw):
+    """Body-frame velocity vx, vy (m/s), absolute height z (m) and absolute yaw (deg), as Navigation.c."""
+    sp.mode.x = modeVelocity
+    sp.mode.y = modeVelocity
+    sp.mode.z = modeAbs
+    sp.mode.yaw = modeAbs
+    sp.velocity.x = vx
+    sp.velocity.y = vy
+    sp.position.z = z
+    sp.attitude.yaw = yaw
+    sp.velocity_body = True
+
+
+def set_null_setpoint(sp):
+    """memset(&setpoint, 0, sizeof(setpoint)): every axis disabled, thrust 0 -> motors off."""
+    sp.memset_zero()
+
+
+class NavigationApp(object):
+    """One instance of the app on one emulated Crazyflie.
+
+    ``flight_path`` is the path F (waypoints [(x, y), ...], metres; compiled-in constants in the C app);
+    ``serial_url`` the camera port (a device, a pty path or ``loop://``); ``target_label``: the species label
+    of ``N2`` lines to act on (``T2`` lines carry no label and are always taken).
+    """
+
+    def __init__(self, cf, flight_path, serial_url, params=None, link=None, target_label=None):
+        self.cf = cf
+        self.target_label = target_label  # N2 lines with another label are ignored (None: accept all)
+        self.other_labels = 0
+        self.params = params or NavigationParams()
+        self.core = NavigationCore(self.params, flight_path)
+        self.link = link or SerialLink(serial_url)
+        self.setpoint = setpoint_t()  # static setpoint_t setpoint;
+        self._frame = []  # detections of the frame being received
+        self._marks_seen = False  # the camera sends MARK START/STOP: frames are delimited by them
+        self.frames = 0
+        self.last_detection_ms = -1
+        cf.registry.register_param_group(PARAM_TABLE, self.params)
+        cf.registry.register_log_group(LOG_TABLE, self)
+
+    def start(self):
+        """appInit(): create the app task and the camera-input task."""
+        self.cf.x_task_create(self.app_main(), "APP", APP_TASK_PRI)
+        self.cf.x_task_create(self.camera_task(), "CAMERA", CAMERA_TASK_PRI)
+
+    # -- the app task -------------------------------------------------------------------------------------
+
+    def app_main(self):
+        cf = self.cf
+        cf.debug_print(DEBUG_MODULE, "ForaNav app started, waiting for the system")
+        yield v_task_delay(m2t(BOOT_DELAY_MS))
+        flow_id = cf.param_get_var_id("deck", "bcFlow2")
+        loco_id = cf.param_get_var_id("deck", "bcLoco")
+        if flow_id.id == PARAM_VARID_INVALID or not cf.param_get_uint(flow_id):
+            cf.debug_print(DEBUG_MODULE, "No flow deck installed, aborting")
+            self.core.abort_no_deck(cf.x_task_get_tick_count())
+            yield v_task_delay(PORT_MAX_DELAY)  # appMain returned: the task parks
+            return
+        if loco_id.id == PARAM_VARID_INVALID or not cf.param_get_uint(loco_id):
+            cf.debug_print(DEBUG_MODULE, "No Loco deck: flying on Flow dead reckoning, expect drift")
+        ids = [cf.log_get_var_id("stateEstimate", name) for name in ("x", "y", "z", "yaw", "vx", "vy")]
+        if LOG_VARID_INVALID in ids:
+            cf.debug_print(DEBUG_MODULE, "stateEstimate not available, aborting")
+            yield v_task_delay(PORT_MAX_DELAY)
+            return
+        self._estimate_ids = ids
+        yield v_task_delay(m2t(PRE_TAKEOFF_DELAY_MS))
+        self.core.start(cf.x_task_get_tick_count())
+        self._print_events()
+        while True:
+            now = cf.x_task_get_tick_count()
+            command = self.core.step(now, self.read_pose())
+            if command.kind == "hover":
+                set_hover_setpoint(self.setpoint, command.vx, command.vy, command.z, 0.0)
+            else:
+                set_null_setpoint(self.setpoint)
+            cf.commander_set_setpoint(self.setpoint, COMMANDER_PRIORITY_EXTRX)
+            self._print_events()
+            yield v_task_delay(m2t(APP_PERIOD_MS))
+
+    def read_pose(self):
+        cf, ids = self.cf, self._estimate_ids
+        return Pose(*[cf.log_get_float(var_id) for var_id in ids])
+
+    def _print_events(self):
+        for event in self.core.events:
+            if event.kind == "phase":
+                text = "phase " + event.detail
+            else:
+                text = "%s tree %d" % (event.kind, event.tree_id) if event.tree_id else event.kind
+                if event.kind in ("tree_added", "tree_reached", "target_selected", "recovery", "abandoned",
+                                  "approach_by_memory"):
+                    text += " at (%.3f, %.3f)" % (event.x, event.y)
+                if event.detail:
+                    text += " " + event.detail
+            self.cf.debug_print(DEBUG_MODULE, text)
+            self.cf.event_trigger(event.kind, tree_id=event.tree_id, x=event.x, y=event.y)
+        del self.core.events[:]
+
+    # -- the camera-input task ----------------------------------------------------------------------------
+
+    def camera_task(self):
+        while True:
+            for line in self.link.poll(self.cf.x_task_get_tick_count()):
+                self.on_camera_line(line)
+            if self._frame and not self._marks_seen:
+                self._end_frame()  # a camera without frame marks: each batch of lines is one frame
+            yield v_task_delay(m2t(CAMERA_TASK_PERIOD_MS))
+
+    def on_camera_line(self, line):
+        """One received line: T2/N2 detections are kept for the frame, MARK START/STOP delimit frames, and
+        everything else (OK, ERR ..., ALIVE, noise) is ignored."""
+        message = foranav_serial.parse_line(line)
+        if isinstance(message, foranav_serial.FrameMark):
+            self._marks_seen = True
+            self._end_frame()
+        elif isinstance(message, foranav_serial.Target2D):
+            if message.kind == "N2" and self.target_label is not None and message.label != self.target_label:
+                self.other_labels += 1
+                return
+            p = self.params
+            self._frame.append(Detection(foranav_serial.std_to_img_x(message.x, p.cam_width_px),
+                                         foranav_serial.std_to_img_y(message.y, p.cam_height_px)))
+
+    def _end_frame(self):
+        if not self._frame or self.core.phase == PHASE_DONE or not hasattr(self, "_estimate_ids"):
+            self._frame = []
+            return
+        now = self.cf.x_task_get_tick_count()
+        pose = self.read_pose()
+        detections, self._frame = self._frame, []
+        ids = self.core.on_frame(now, detections, pose)
+        self.frames += 1
+        self.last_detection_ms = now
+        for det, tree_id, (wx, wy) in zip(detections, ids, self.core.last_frame_points):
+            self.cf.event_trigger("detection", u=det.u, v=det.v, tree_id=tree_id, z=pose.z, x=wx, y=wy)
+        self._print_events()
+
+    # -- LOG variables ------------------------------------------------------------------------------------
+
+    phase = property(lambda self: self.core.phase)
+    target_id = property(lambda self: self.core.target_id)
+    num_trees = property(lambda self: len(self.core.memory))
+    num_visited = property(lambda self: len(self.core.memory.visited))
+    waypoint_index = property(lambda self: self.core.waypoint_index)
+    reached = property(lambda self: self.core.counters.reached)
+    recoveries = property(lambda self: self.core.counters.recoveries)
+    abandoned = property(lambda self: self.core.counters.abandoned)
+    detections = property(lambda self: self.core.counters.detections)
+    out_of_column = property(lambda self: self.core.counters.out_of_column)
+    evicted = property(lambda self: self.core.memory.evicted)
+    forgotten = property(lambda self: self.core.memory.visited_forgotten)
+    captured = property(lambda self: int(self.core.captured))
+    err_u = property(lambda self: self.core.pixel_error[0])
+    err_v = property(lambda self: self.core.pixel_error[1])
+    link_dropped = property(lambda self: self.link.lines_dropped)
+    link_opens = property(lambda self: self.link.opens)
+
+    @property
+    def target_x(self):
+        tree = self.core.memory.get(self.core.target_id)
+        return tree.x if tree else math.nan
+
+    @property
+    def target_y(self):
+        tree = self.core.memory.get(self.core.target_id)
+        return tree.y if tree else math.nan
+
+
+# ----------------------------------------------------------------------------------------------------------
+# PARAM_GROUP_START(app) ... PARAM_GROUP_STOP(app): every threshold and speed law, with units and the source
+# of its default (the paper's flight tests, Navigation.c, or this port's design).
+
+PARAM_TABLE = param_group("app", [
+    param_add(PARAM_FLOAT, "altitude", "altitude_m", "m", "flight height above ground (paper: 1.25 m)"),
+    param_add(PARAM_FLOAT, "takeoffTol", "takeoff_tolerance_m", "m", "height error that counts as at altitude"),
+    param_add(PARAM_UINT16, "takeoffSettle", "takeoff_settle_ms", "ms", "time at altitude before the path starts"),
+    param_add(PARAM_FLOAT, "landHeight", "land_height_m", "m", "first landing step height (Navigation.c: 0.5 m)"),
+    param_add(PARAM_FLOAT, "landFinal", "land_final_m", "m", "second landing step height (Navigation.c: 0.15 m)"),
+    param_add(PARAM_UINT16, "landStep", "land_step_ms", "ms", "duration of each landing step (Navigation.c: 3 s)"),
+    param_add(PARAM_FLOAT, "cruiseSpeed", "cruise_speed", "m/s", "speed along the path F (paper: <= 0.1 m/s)"),
+    param_add(PARAM_FLOAT, "arrivalSpeed", "arrival_min_speed", "m/s",
+              "slowest speed of the follow law near a waypoint (it slows down as 1/s x distance)"),
+    param_add(PARAM_FLOAT, "wpTolerance", "waypoint_tolerance_m", "m",
+              "distance at which a waypoint counts as reached (Navigation.c: 0.03 m)"),
+    param_add(PARAM_FLOAT, "lookahead", "lookahead_m", "m", "carrot distance ahead on the path segment"),
+    param_add(PARAM_FLOAT, "approachSpeed", "approach_speed", "m/s", "visual-servo speed limit (paper: 0.1)"),
+    param_add(PARAM_FLOAT, "servoGain", "servo_gain", "1/s", "visual-servo velocity per metre of image offset"),
+    param_add(PARAM_FLOAT, "captureRadius", "capture_radius_px", "px",
+              "tau: offset at which the tree counts as nearly centred (paper / Navigation.c: 40 px)"),
+    param_add(PARAM_FLOAT, "settleRadius", "settle_radius_px", "px",
+              "reached: filtered offset below this (6 px ~ 2.3 cm at 1.25 m) ..."),
+    param_add(PARAM_UINT16, "settleDwell", "settle_dwell_ms", "ms", "... held this long ..."),
+    param_add(PARAM_FLOAT, "settleSpeed", "settle_speed", "m/s", "... while the MAV is slower than this"),
+    param_add(PARAM_FLOAT, "settleRelax", "settle_relax", "px/s",
+              "growth of settleRadius (and settleSpeed) per second captured beyond settleGrace, up to "
+              "captureRadius"),
+    param_add(PARAM_UINT16, "settleGrace", "settle_grace_ms", "ms", "captured time before settleRelax starts"),
+    param_add(PARAM_FLOAT, "servoKi", "servo_integral", "1/s^2",
+              "integral gain of the visual servo, active only when held near but off the centre (wind)"),
+    param_add(PARAM_FLOAT, "servoKiBand", "servo_integral_band", "",
+              "the servo integrates only inside this many settle radii"),
+    param_add(PARAM_FLOAT, "recoveryDist", "recovery_distance_m", "m",
+              "delta: MAV-to-s_t distance that starts recovery (Navigation.c: 0.7 m)"),
+    param_add(PARAM_UINT16, "lostTimeout", "lost_timeout_ms", "ms",
+              "target unseen this long during the approach: recovery"),
+    param_add(PARAM_UINT32, "recoveryTimeout", "recovery_timeout_ms", "ms",
+              "recovery gives up (tree abandoned) after this long"),
+    param_add(PARAM_FLOAT, "recoverySpeed", "recovery_speed", "m/s", "speed when re-approaching s_t"),
+    param_add(PARAM_FLOAT, "returnTol", "return_tolerance_m", "m",
+              "cross-track error that ends RETURN_TO_PATH"),
+    param_add(PARAM_FLOAT, "mergeRadius", "merge_radius_m", "m",
+              "detections this close to a stored tree are the same tree (Navigation.c: 0.45 m)"),
+    param_add(PARAM_FLOAT, "crownSize", "crown_size_m", "m", "crown size of a mature tree (planting column)"),
+    param_add(PARAM_FLOAT, "columnFactor", "column_factor", "",
+              "planting column half-width in crown sizes (paper: 1.5)"),
+    param_add(PARAM_UINT8, "minHits", "min_hits", "", "detections before a tree may become the target"),
+    param_add(PARAM_UINT8, "treeCapacity", "tree_capacity", "", "capacity of T_d (overflow evicts, counted)"),
+    param_add(PARAM_UINT16, "visitedCap", "visited_capacity", "", "capacity of the visited list (counted)"),
+    param_add(PARAM_UINT16, "camWidth", "cam_width_px", "px", "camera frame width (JeVois 352x288 mode)"),
+    param_add(PARAM_UINT16, "camHeight", "cam_height_px", "px", "camera frame height"),
+    param_add(PARAM_FLOAT, "camScale", "cam_scale", "m/px/m",
+              "ground size of a pixel per metre of height at 352 px width (0.0031)"),
+    param_add(PARAM_FLOAT, "camOffsetX", "cam_offset_x_m", "m", "camera mount, body forward (default 0)"),
+    param_add(PARAM_FLOAT, "camOffsetY", "cam_offset_y_m", "m", "camera mount, body left (default 0)"),
+    param_add(PARAM_UINT16, "camLatency", "cam_latency_ms", "ms", "capture-to-reception latency of a frame"),
+    param_add(PARAM_FLOAT, "kfMeasStd", "kf_measurement_std_px", "px", "Kalman filter: detection noise std"),
+    param_add(PARAM_FLOAT, "kfAccelPsd", "kf_accel_psd", "px^2/s^3",
+              "Kalman filter: white-acceleration spectral density of the image motion"),
+])
+
+# LOG_GROUP_START(app) ... LOG_GROUP_STOP(app)
+LOG_TABLE = log_group("app", [
+    log_add(LOG_UINT8, "phase", "phase", "", "app phase (navigation_core.PHASE_NAMES)"),
+    log_add(LOG_UINT16, "targetId", "target_id", "", "id of the target tree t* (0: none)"),
+    log_add(LOG_FLOAT, "targetX", "target_x", "m", "stored position s_t of the target"),
+    log_add(LOG_FLOAT, "targetY", "target_y", "m", "stored position s_t of the target"),
+    log_add(LOG_FLOAT, "errU", "err_u", "px", "filtered image offset e_p, column"),
+    log_add(LOG_FLOAT, "errV", "err_v", "px", "filtered image offset e_p, row"),
+    log_add(LOG_UINT8, "captured", "captured", "", "1 while e_p < captureRadius"),
+    log_add(LOG_UINT8, "numTrees", "num_trees", "", "trees in T_d"),
+    log_add(LOG_UINT16, "numVisited", "num_visited", "", "entries in the visited list"),
+    log_add(LOG_UINT8, "waypoint", "waypoint_index", "", "index of the waypoint being flown to"),
+    log_add(LOG_UINT16, "reached", "reached", "", "trees reached"),
+    log_add(LOG_UINT16, "recoveries", "recoveries", "", "recoveries started"),
+    log_add(LOG_UINT16, "abandoned", "abandoned", "", "trees given up after a failed recovery"),
+    log_add(LOG_UINT32, "detections", "detections", "", "detections received"),
+    log_add(LOG_UINT32, "outOfColumn", "out_of_column", "", "detections outside the planting column"),
+    log_add(LOG_UINT16, "evicted", "evicted", "", "trees evicted from a full T_d"),
+    log_add(LOG_UINT16, "forgotten", "forgotten", "", "visited entries forgotten from a full list"),
+    log_add(LOG_UINT32, "linkDropped", "link_dropped", "", "serial lines dropped for length"),
+    log_add(LOG_UINT16, "linkOpens", "link_opens", "", "times the serial port was (re)opened"),
+])

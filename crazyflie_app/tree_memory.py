@@ -1,0 +1,115 @@
+"""The detected-tree memory T_d and the visited list (paper Algorithm 1), bounded and without index hazards.
+
+Trees are keyed by a stable integer id, never by their position in a list, so removing one tree cannot
+make a stored target index point at another (the C app kept ``KalmantreeNum`` as an index into an array
+that ``removeCoordinate`` shifted). Both collections are bounded, and overflow is never silent:
+
+* T_d holds at most ``capacity`` trees; a new tree when full evicts the stored tree farthest from the MAV
+  (the least useful one) and counts it in ``evicted``;
+* the visited list holds at most ``visited_capacity`` entries; when full the entry farthest from the MAV is
+  forgotten and counted in ``visited_forgotten`` (the C app wrote past the end of ``treeBlacklist[10]``).
+
+Association is nearest-neighbour with exclusivity per camera frame: each detection of a frame goes to the
+nearest stored *or visited* tree within the merge radius, and no two detections of one frame go to the same
+tree (two trees seen together are two trees, even 0.47 m apart in a cluster).
+"""
+import math
+from dataclasses import dataclass
+
+POSITION_AVERAGE_WINDOW = 20  # detections: the stored position is a running mean over about this many
+
+
+@dataclass
+class StoredTree:
+    id: int
+    x: float  # estimated world position s_t (m)
+    y: float
+    hits: int
+    first_ms: int
+    last_ms: int
+    u: float  # last measured image position (px)
+    v: float
+
+
+@dataclass
+class VisitedTree:
+    id: int
+    x: float
+    y: float
+    t_ms: int
+    reached: bool  # False: abandoned after a failed recovery
+
+
+class TreeMemory(object):
+    def __init__(self, capacity=32, visited_capacity=64):
+        if capacity < 1 or visited_capacity < 1:
+            raise ValueError("tree memory capacities must be >= 1")
+        self.capacity = int(capacity)
+        self.visited_capacity = int(visited_capacity)
+        self.trees = {}  # id -> StoredTree, in insertion order
+        self.visited = []  # VisitedTree, oldest first
+        self.evicted = 0
+        self.visited_forgotten = 0
+        self._next_id = 1
+
+    def __len__(self):
+        return len(self.trees)
+
+    def get(self, tree_id):
+        return self.trees.get(tree_id)
+
+    def associate(self, points, merge_radius):
+        """For each world point (x, y) of one frame: ('tree', id), ('visited', id) or (None, None)."""
+        pairs = []
+        for i, (px, py) in enumerate(points):
+            for t in self.trees.values():
+                d = math.hypot(px - t.x, py - t.y)
+                if d <= merge_radius:
+                    pairs.append((d, i, "tree", t.id))
+            for k, t in enumerate(self.visited):
+                d = math.hypot(px - t.x, py - t.y)
+                if d <= merge_radius:
+                    pairs.append((d, i, "visited", -1 - k))
+        pairs.sort(key=lambda p: (p[0], p[1]))
+        result = [(None, None)] * len(points)
+        taken = set()
+        for d, i, kind, key in pairs:
+            if result[i][0] is None and (kind, key) not in taken:
+                taken.add((kind, key))
+                result[i] = (kind, key if kind == "tree" else self.visited[-1 - key].id)
+        return result
+
+    def add(self, x, y, t_ms, u, v, mav_xy):
+        """Store a new tree; returns (new id, [ids evicted to make room])."""
+        evicted = []
+        while len(self.trees) >= self.capacity:
+            evicted.append(self._farthest(self.trees.values(), mav_xy).id)
+            del self.trees[evicted[-1]]
+            self.evicted += 1
+        tree = StoredTree(self._next_id, x, y, 1, t_ms, t_ms, u, v)
+        self._next_id += 1
+        self.trees[tree.id] = tree
+        return tree.id, evicted
+
+    def update(self, tree_id, x, y, t_ms, u, v):
+        """Merge one more detection into a stored tree (running mean of its position)."""
+        t = self.trees[tree_id]
+        t.hits += 1
+        weight = 1.0 / min(t.hits, POSITION_AVERAGE_WINDOW)
+        t.x += weight * (x - t.x)
+        t.y += weight * (y - t.y)
+        t.last_ms, t.u, t.v = t_ms, u, v
+
+    def mark_visited(self, tree_id, t_ms, mav_xy, reached=True):
+        """Move a tree from T_d to the visited list (reached, or abandoned when reached is False)."""
+        t = self.trees.pop(tree_id)
+        while len(self.visited) >= self.visited_capacity:
+            self.visited.remove(self._farthest(self.visited, mav_xy))
+            self.visited_forgotten += 1
+        self.visited.append(VisitedTree(t.id, t.x, t.y, t_ms, reached))
+        return t
+
+    @staticmethod
+    def _farthest(items, mav_xy):
+        mx, my = mav_xy
+        return max(items, key=lambda t: (math.hypot(t.x - mx, t.y - my), -t.id))

@@ -1,0 +1,47 @@
+"""Flight benchmark: simulated seconds flown per CPU second, oracle camera, the three paper maps.
+
+Meant for ``foranav bench flight [--json] [--seed N]`` (the bench dispatcher lists its targets); prints
+figures, asserts nothing.
+"""
+import json
+import time
+
+from host_tools.flight import OracleCamera, run_flight
+from host_tools.maps import load_map
+
+MAPS = ("map1", "map2", "map3")
+
+
+def measure(seed=0):
+    rows = []
+    for name in MAPS:
+        pmap = load_map(name)
+        wall0 = time.perf_counter()
+        summary = run_flight(pmap, OracleCamera(pmap, seed=seed), seed=seed)
+        wall = time.perf_counter() - wall0
+        rows.append({"map": name, "mission_s": summary["mission_time_s"], "cpu_s": summary["cpu_s"],
+                     "wall_s": round(wall, 2),
+                     "sim_s_per_cpu_s": round(summary["mission_time_s"] / max(summary["cpu_s"], 1e-6), 1)})
+    return rows
+
+
+def run(args):
+    rows = measure(getattr(args, "seed", 0))
+    if getattr(args, "json", False):
+        print(json.dumps({"flight": rows}, indent=2))
+    else:
+        print("%-6s %12s %10s %10s %16s" % ("map", "mission (s)", "CPU (s)", "wall (s)", "sim s / CPU s"))
+        for r in rows:
+            print("%-6s %12.1f %10.2f %10.2f %16.1f" % (r["map"], r["mission_s"], r["cpu_s"], r["wall_s"],
+                                                        r["sim_s_per_cpu_s"]))
+    return 0
+
+
+if __name__ == "__main__":
+    import argparse
+    import sys
+
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--json", action="store_true")
+    parser.add_argument("--seed", type=int, default=0)
+    sys.exit(run(parser.parse_args()))

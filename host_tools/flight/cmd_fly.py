@@ -1,0 +1,133 @@
+"""Fly a map with the Crazyflie navigation app on the emulated firmware.
+
+The app (crazyflie_app/navigation.py) runs on the firmware emulation; a camera on the other end of a real
+pseudo-terminal sends it JeVois serial lines. --camera oracle is an ideal detector reading the map's ground
+truth (pixel noise, dropout and latency configurable); --camera sim (the rendered simulator with the JeVois
+module in the loop) comes with the vision half.
+
+Prints the flight summary (a short table, or the JSON object with --json) and writes flight.tlog (MAVLink 2),
+trajectory.png and summary.json into --out (default runs/fly-<map>-seed<N>/). Exit status 0 when the flight
+completed, 1 when it did not (crash, watchdog lock, time limit), 2 on bad input.
+
+Examples:
+  foranav fly --map map1 --camera oracle
+  foranav fly --map map2 --camera oracle --dropout 0.3 --json
+  foranav fly --map map3 --camera oracle --hide-tree 6 --hide-s 5 --mavlink udpout:127.0.0.1:14550
+"""
+import json
+import sys
+import time
+from pathlib import Path
+
+from host_tools.errors import ForaNavError
+
+CAMERA_CHOICES = ("oracle", "sim")
+PROGRESS_EVERY_S = 5.0  # wall-clock seconds between progress lines on stderr
+
+
+def add_arguments(parser):
+    parser.add_argument("--map", required=True, help="built-in map name (map1, map2, map3) or map file")
+    parser.add_argument("--camera", choices=CAMERA_CHOICES, default="oracle",
+                        help="oracle: ground-truth detector; sim: rendered frames + JeVois module (issue #5)")
+    parser.add_argument("--seed", type=int, default=0, help="seed of every random choice (default 0)")
+    parser.add_argument("--out", help="output folder (default runs/fly-<map>-seed<N>/)")
+    parser.add_argument("--json", action="store_true", help="print the summary as one JSON object")
+    parser.add_argument("--dropout", type=float, default=0.0,
+                        help="probability that a detection is lost on the way (default 0)")
+    parser.add_argument("--hide-tree", type=int, help="hide this tree id from the camera ...")
+    parser.add_argument("--hide-s", type=float, default=5.0,
+                        help="... for this many seconds from when the app first approaches it (default 5)")
+    parser.add_argument("--pixel-noise", type=float, default=None, help="oracle: pixel noise std (px)")
+    parser.add_argument("--latency-ms", type=int, default=None, help="oracle: frame latency (ms)")
+    parser.add_argument("--cam-offset", type=float, nargs=2, metavar=("FWD", "LEFT"), default=None,
+                        help="camera mount offset from the MAV centre, body frame (m); sets the oracle's mount "
+                             "and the app's app.camOffsetX/Y")
+    parser.add_argument("--estimator", choices=("uwb", "flow"), default="uwb",
+                        help="state estimate model: uwb (absolute, biased) or flow (drifting)")
+    parser.add_argument("--wind", type=float, default=0.0, help="wind gust acceleration std (m/s^2)")
+    parser.add_argument("--mavlink", help="also stream the telemetry live, e.g. udpout:127.0.0.1:14550")
+
+
+def _options(args):
+    if not 0.0 <= args.dropout <= 1.0:
+        raise ForaNavError("--dropout: must be in [0, 1], got %r" % args.dropout)
+    if args.hide_s < 0:
+        raise ForaNavError("--hide-s: must not be negative")
+    if args.wind < 0:
+        raise ForaNavError("--wind: must not be negative")
+    options = {"dropout": args.dropout, "model": {"estimator": args.estimator, "wind_gust_mps2": args.wind}}
+    if args.hide_tree is not None:
+        options.update(hide_tree=args.hide_tree, hide_s=args.hide_s)
+    if args.mavlink:
+        options["mavlink"] = args.mavlink
+    if args.cam_offset is not None:
+        options["params"] = {"app.camOffsetX": args.cam_offset[0], "app.camOffsetY": args.cam_offset[1]}
+    return options
+
+
+def _camera_kwargs(args):
+    kwargs = {}
+    if args.pixel_noise is not None:
+        if args.pixel_noise < 0:
+            raise ForaNavError("--pixel-noise: must not be negative")
+        kwargs["pixel_noise_px"] = args.pixel_noise
+    if args.latency_ms is not None:
+        if args.latency_ms < 0:
+            raise ForaNavError("--latency-ms: must not be negative")
+        kwargs["latency_ms"] = args.latency_ms
+    if args.cam_offset is not None:
+        kwargs["mount_offset"] = tuple(args.cam_offset)
+    return kwargs
+
+
+def print_table(summary, out=None):
+    out = out or sys.stdout
+    mean = summary["mean_deviation_m"]
+    ci = summary["ci95_m"]
+    print("map %s, seed %d: %s" % (summary["map"], summary["seed"],
+                                   "SUCCESS" if summary["success"] else
+                                   ("completed" if summary["completed"] else "NOT COMPLETED")), file=out)
+    print("  %-6s %-14s %s" % ("tree", "deviation (m)", "t (s)"), file=out)
+    for r in summary["reached"]:
+        print("  %-6s %-14.3f %.1f" % (r["id"] if r["id"] is not None else "-", r["deviation_m"], r["t_s"]),
+              file=out)
+    print("  targets %s; missed %s; non-targets visited %s" % (
+        summary["targets"], summary["missed_targets"] or "none", summary["non_targets_visited"] or "none"),
+        file=out)
+    print("  mean deviation %s m (95%% CI +/- %s); mission %.1f s; recoveries %d; watchdog events %d" % (
+        "-" if mean is None else "%.3f" % mean, "-" if ci is None else "%.3f" % ci, summary["mission_time_s"],
+        summary["recoveries"], summary["watchdog_events"]), file=out)
+    if summary.get("tlog"):
+        print("  tlog %s\n  plot %s" % (summary["tlog"], summary["plot"]), file=out)
+
+
+def run(args):
+    from host_tools.flight import camera_factory, run_flight
+    from host_tools.maps import load_map
+
+    factory = camera_factory(args.camera)  # 'sim' fails here until the vision half registers it
+    options = _options(args)
+    pmap = load_map(args.map)
+    out = Path(args.out) if args.out else Path("runs") / ("fly-%s-seed%d" % (Path(args.map).stem, args.seed))
+    try:
+        camera = factory(pmap, seed=args.seed, **_camera_kwargs(args))
+    except ValueError as err:
+        raise ForaNavError("camera: %s" % err)
+
+    last_print = [time.monotonic()]
+
+    def progress(t_s, phase):
+        # only slow flights (a camera in the loop) need a sign of life; an oracle flight takes ~1 s
+        if not args.json and time.monotonic() - last_print[0] >= PROGRESS_EVERY_S:
+            last_print[0] = time.monotonic()
+            print("  t = %5.0f s  %s" % (t_s, phase), file=sys.stderr)
+
+    summary = run_flight(pmap, camera, seed=args.seed, out_dir=out, options=options, progress=progress)
+    cpu = summary.pop("cpu_s", None)
+    if args.json:
+        print(json.dumps(summary, indent=2))
+    else:
+        print_table(summary)
+        if cpu is not None:
+            print("  cpu %.2f s" % cpu)
+    return 0 if summary["completed"] else 1

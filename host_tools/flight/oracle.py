@@ -1,0 +1,82 @@
+"""The oracle camera: an ideal tree detector that reads the map's ground truth instead of images.
+
+It implements the camera interface of the flight harness (``frame_period_ms``, ``latency_ms``,
+``capture(t_ms, true_pose, hidden=frozenset()) -> list[str]``): for each tree of the map's target species
+whose whole crown is inside the 352x288 frame seen from the true pose, it emits a ``T2`` line in JeVois
+standardized coordinates (with Gaussian pixel noise and an independent dropout per detection), then
+``MARK STOP``. It detects *species*, not the planting-column rule: an oil palm outside the column is reported
+too, and the app must ignore it. Camera model and frames as in docs/DESIGN.md.
+"""
+import math
+
+import numpy as np
+
+from jevois_module.ForaNavTrees import foranav_serial
+
+DEFAULT_FRAME_PERIOD_MS = 100  # ~10 fps (the paper's detector runs at 8.9 fps on the JeVois)
+DEFAULT_LATENCY_MS = 50
+DEFAULT_PIXEL_NOISE_PX = 1.5
+CAM_SCALE_352 = 0.0031  # m per px per m of height at 352 px width
+
+
+class OracleCamera(object):
+    def __init__(self, pmap, *, seed=0, frame_period_ms=DEFAULT_FRAME_PERIOD_MS, latency_ms=DEFAULT_LATENCY_MS,
+                 pixel_noise_px=DEFAULT_PIXEL_NOISE_PX, dropout=0.0, width=352, height=288,
+                 mount_offset=(0.0, 0.0), frame_marks=True):
+        if not 0.0 <= dropout <= 1.0:
+            raise ValueError("dropout must be in [0, 1], got %r" % dropout)
+        if frame_period_ms <= 0 or latency_ms < 0:
+            raise ValueError("frame_period_ms must be > 0 and latency_ms >= 0")
+        self.frame_period_ms = int(frame_period_ms)
+        self.latency_ms = int(latency_ms)
+        self.pixel_noise_px = float(pixel_noise_px)
+        self.dropout = float(dropout)
+        self.width, self.height = int(width), int(height)
+        self.focal_px = (1.0 / CAM_SCALE_352) * self.width / 352.0
+        self.mount_offset = tuple(mount_offset)
+        self.frame_marks = frame_marks
+        self.trees = [t for t in pmap.trees if t.species == pmap.target_species]
+        self._rng = np.random.default_rng(seed)
+
+    def ground_point(self, true_pose):
+        x, y, z, yaw_deg = true_pose
+        c, s = math.cos(math.radians(yaw_deg)), math.sin(math.radians(yaw_deg))
+        ox, oy = self.mount_offset
+        return x + ox * c - oy * s, y + ox * s + oy * c
+
+    def project(self, tree_x, tree_y, true_pose):
+        """Pixel (u, v) of a ground point seen from ``true_pose`` (x, y, z, yaw_deg)."""
+        x, y, z, yaw_deg = true_pose
+        gx, gy = self.ground_point(true_pose)
+        c, s = math.cos(math.radians(yaw_deg)), math.sin(math.radians(yaw_deg))
+        dx, dy = tree_x - gx, tree_y - gy
+        fwd, left = dx * c + dy * s, -dx * s + dy * c
+        k = self.focal_px / z
+        return self.width / 2.0 - left * k, self.height / 2.0 - fwd * k
+
+    def visible(self, true_pose, hidden=frozenset()):
+        """(tree, u, v) for each target-species tree whose whole crown is in the frame."""
+        z = true_pose[2]
+        if z <= 0.05:
+            return []
+        out = []
+        for tree in self.trees:
+            if tree.id in hidden:
+                continue
+            u, v = self.project(tree.x, tree.y, true_pose)
+            r = 0.5 * tree.crown_m * self.focal_px / z
+            if r <= u <= self.width - r and r <= v <= self.height - r:
+                out.append((tree, u, v))
+        return out
+
+    def capture(self, t_ms, true_pose, hidden=frozenset()):
+        lines = []
+        for tree, u, v in self.visible(true_pose, hidden):
+            # draw both random numbers for every tree so dropout does not shift the noise sequence
+            noise = self._rng.normal(0.0, self.pixel_noise_px, 2) if self.pixel_noise_px > 0 else (0.0, 0.0)
+            keep = self._rng.random() >= self.dropout
+            if keep:
+                lines.append(foranav_serial.format_t2(u + noise[0], v + noise[1], self.width, self.height))
+        if self.frame_marks:
+            lines.append(foranav_serial.FRAME_STOP)
+        return lines

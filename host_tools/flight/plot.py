@@ -1,0 +1,56 @@
+"""The trajectory plot of a flight (matplotlib, Agg): map trees, path F, flown trajectory, detections."""
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+from matplotlib.patches import Circle  # noqa: E402
+
+from crazyflie_app.navigation_core import PHASE_RECOVERY  # noqa: E402
+from host_tools import fileio  # noqa: E402
+
+COLOURS = {"target": "#2e7d32", "non_target": "#9e9e9e", "reached": "#1565c0", "recovery": "#d32f2f",
+           "path": "#555555", "truth": "#1565c0", "estimate": "#90caf9", "app_tree": "#ff8f00"}
+
+
+def plot_trajectory(flight, path):
+    """Draw ``flight`` (a harness _Flight after its run) into the PNG ``path`` (atomic write)."""
+    pmap = flight.pmap
+    fig, ax = plt.subplots(figsize=(8, 3.6), dpi=110)
+    reached_ids = {r["id"] for r in flight.reached}
+    for tree in pmap.trees:
+        kind = "target" if tree.target else "non_target"
+        ax.add_patch(Circle((tree.x, tree.y), tree.crown_m / 2, facecolor=COLOURS[kind], alpha=0.25,
+                            edgecolor=COLOURS["reached"] if tree.id in reached_ids else COLOURS[kind],
+                            linewidth=2.0 if tree.id in reached_ids else 1.0))
+        ax.annotate(str(tree.id), (tree.x, tree.y + tree.crown_m / 2 + 0.03), ha="center", fontsize=8)
+    xs, ys = zip(*pmap.waypoints)
+    ax.plot(xs, ys, "--", color=COLOURS["path"], linewidth=1, label="path F")
+    if flight.trajectory:
+        _, tx, ty, ex, ey, phases = zip(*flight.trajectory)
+        ax.plot(ex, ey, color=COLOURS["estimate"], linewidth=0.8, label="estimate")
+        ax.plot(tx, ty, color=COLOURS["truth"], linewidth=1.2, label="flown (truth)")
+        recovery = [(x, y) for x, y, p in zip(tx, ty, phases) if p == PHASE_RECOVERY]
+        if recovery:
+            rx, ry = zip(*recovery)
+            ax.plot(rx, ry, ".", color=COLOURS["recovery"], markersize=3, label="recovery")
+    if flight.detections:
+        dx, dy = zip(*flight.detections)
+        ax.plot(dx, dy, ".", color=COLOURS["app_tree"], markersize=1.5, alpha=0.4, label="detections (app)")
+    if flight.app_trees:
+        _, ax_, ay_ = zip(*flight.app_trees)
+        ax.plot(ax_, ay_, "x", color=COLOURS["app_tree"], markersize=5, label="trees stored by the app")
+    if flight.reached:
+        px, py = zip(*(r["point"] for r in flight.reached))
+        ax.plot(px, py, "+", color="black", markersize=9, label="declared reached")
+    ax.plot([], [], "o", color=COLOURS["target"], alpha=0.4, label="target tree")
+    ax.plot([], [], "o", color=COLOURS["non_target"], alpha=0.4, label="non-target tree")
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (m, forward)")
+    ax.set_ylabel("y (m, left)")
+    ax.set_title(pmap.name.split(":")[0] + " - seed %d" % flight.seed, fontsize=10)
+    ax.grid(True, linewidth=0.3)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7)
+    fig.tight_layout()
+    with fileio.atomic_path(path) as tmp:
+        fig.savefig(tmp)
+    plt.close(fig)

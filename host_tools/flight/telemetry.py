@@ -1,0 +1,113 @@
+"""MAVLink 2 telemetry of a flight: a .tlog on disk, optionally the same stream live to a ground station.
+
+A .tlog is a sequence of records: an 8-byte big-endian timestamp (microseconds since 1970) followed by one
+MAVLink frame. Timestamps come from the *simulated* clock (``EPOCH_US`` + tick), so the same flight gives the
+same bytes. Dialect ``common``, MAVLink 2, system 1 / component 1 (an autopilot, so a GCS accepts it).
+
+Frames: Crazyflie world is FLU (x forward, y left, z up); MAVLink local is NED with north := Crazyflie +x,
+so x_N = x, y_E = -y, z_D = -z and yaw_NED = -yaw.
+
+Messages: HEARTBEAT (1 Hz; custom_mode = app phase, system_status from the supervisor), LOCAL_POSITION_NED
+of the estimate and DEBUG_VECT "gt_pos" of the ground truth (10 Hz), POSITION_TARGET_LOCAL_NED per accepted
+setpoint (type mask 2531: vx, vy, z, yaw), LANDING_TARGET per detection (angles from the pixel, distance =
+height, target_num = tree id), STATUSTEXT per console line (split into 50-character chunks).
+"""
+import math
+import os
+import struct
+
+os.environ.setdefault("MAVLINK20", "1")
+from pymavlink.dialects.v20 import common as mavlink2  # noqa: E402
+
+EPOCH_US = 1741132800 * 1000000  # 2025-03-05T00:00:00Z: a fixed origin keeps the bytes reproducible
+SYSTEM_ID, COMPONENT_ID = 1, 1
+TYPE_MASK_HOVER = 2531  # use vx, vy, z, yaw (crazyflie.md 6.5)
+STATUSTEXT_CHUNK = 50
+
+
+class _TimestampedFile(object):
+    """The file object MAVLink.send writes to: prefixes each frame with the simulated-time header."""
+
+    def __init__(self, fileobj, live=None):
+        self.fileobj = fileobj
+        self.live = live
+        self.t_us = EPOCH_US
+
+    def write(self, buf):
+        self.fileobj.write(struct.pack(">Q", self.t_us) + bytes(buf))
+        if self.live is not None:
+            self.live.write(bytes(buf))
+
+
+class TlogWriter(object):
+    """Write telemetry; every method takes the simulated time in ms."""
+
+    def __init__(self, path, live_url=None):
+        self.path = str(path)
+        live = None
+        if live_url:  # first: a bad URL must fail before any file exists
+            from pymavlink import mavutil
+            live = mavutil.mavlink_connection(live_url, source_system=SYSTEM_ID, source_component=COMPONENT_ID,
+                                              dialect="common")
+        self._live = live
+        self._tmp_path = self.path + ".part"  # renamed over path by close(): never a half-written .tlog
+        self._file = open(self._tmp_path, "wb")
+        self._sink = _TimestampedFile(self._file, live)
+        self.mav = mavlink2.MAVLink(self._sink, srcSystem=SYSTEM_ID, srcComponent=COMPONENT_ID)
+        self._status_id = 0
+        self.messages = 0
+
+    def _at(self, t_ms):
+        self._sink.t_us = EPOCH_US + int(t_ms) * 1000
+        self.messages += 1
+
+    def heartbeat(self, t_ms, phase, armed, system_status):
+        self._at(t_ms)
+        base_mode = mavlink2.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | mavlink2.MAV_MODE_FLAG_GUIDED_ENABLED
+        if armed:
+            base_mode |= mavlink2.MAV_MODE_FLAG_SAFETY_ARMED
+        self.mav.heartbeat_send(mavlink2.MAV_TYPE_QUADROTOR, mavlink2.MAV_AUTOPILOT_GENERIC, base_mode,
+                                int(phase), system_status)
+
+    def local_position(self, t_ms, x, y, z, vx, vy, vz):
+        self._at(t_ms)
+        self.mav.local_position_ned_send(int(t_ms), x, -y, -z, vx, -vy, -vz)
+
+    def ground_truth(self, t_ms, x, y, z):
+        self._at(t_ms)
+        self.mav.debug_vect_send(b"gt_pos", EPOCH_US + int(t_ms) * 1000, x, -y, -z)
+
+    def position_target(self, t_ms, vx_world, vy_world, z, yaw_deg):
+        self._at(t_ms)
+        self.mav.position_target_local_ned_send(int(t_ms), mavlink2.MAV_FRAME_LOCAL_NED, TYPE_MASK_HOVER,
+                                                0.0, 0.0, -z, vx_world, -vy_world, 0.0, 0.0, 0.0, 0.0,
+                                                -math.radians(yaw_deg), 0.0)
+
+    def landing_target(self, t_ms, tree_id, u, v, width, height, focal_px, distance_m):
+        self._at(t_ms)
+        angle_x = math.atan((u - width / 2.0) / focal_px)  # + = right of centre (+y FRD)
+        angle_y = math.atan((v - height / 2.0) / focal_px)  # + = towards the tail
+        self.mav.landing_target_send(EPOCH_US + int(t_ms) * 1000, min(max(int(tree_id), 0), 255),
+                                     mavlink2.MAV_FRAME_BODY_FRD, angle_x, angle_y, distance_m, 0.0, 0.0,
+                                     type=mavlink2.LANDING_TARGET_TYPE_VISION_OTHER, position_valid=0)
+
+    def status_text(self, t_ms, text, severity=mavlink2.MAV_SEVERITY_INFO):
+        data = text.encode("ascii", "replace")
+        chunks = [data[i:i + STATUSTEXT_CHUNK] for i in range(0, len(data), STATUSTEXT_CHUNK)] or [b""]
+        self._status_id = self._status_id % 65535 + 1 if len(chunks) > 1 else 0
+        for seq, chunk in enumerate(chunks):
+            self._at(t_ms)
+            self.mav.statustext_send(severity, chunk, id=self._status_id, chunk_seq=seq)
+
+    def close(self, keep=True):
+        """Finish the log (keep=True: rename it into place; False: delete the partial file)."""
+        if self._file is not None:
+            self._file.close()
+            self._file = None
+            if keep:
+                os.replace(self._tmp_path, self.path)
+            else:
+                os.unlink(self._tmp_path)
+        if self._live is not None:
+            self._live.close()
+            self._live = None

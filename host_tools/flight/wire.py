@@ -1,0 +1,66 @@
+"""The serial wire between the camera and the flight controller: a real pseudo-terminal.
+
+``PtyWire()`` opens a pty pair in raw mode; the app's serial link opens ``slave_path`` with pyserial like a
+UART, and the harness writes the camera's bytes into the master side. In lockstep mode ``write`` returns
+only once the bytes are readable on the slave side (ioctl FIONREAD), so the simulated clock never runs ahead
+of the kernel and a run is deterministic: same map and seed, same bytes read at the same simulated ticks.
+"""
+import fcntl
+import os
+import struct
+import termios
+import time
+import tty
+
+LOCKSTEP_TIMEOUT_S = 5.0  # wall-clock limit for bytes to cross the pty (normally microseconds)
+
+
+class WireError(RuntimeError):
+    pass
+
+
+class PtyWire(object):
+    def __init__(self, lockstep=True):
+        self.master_fd, self.slave_fd = os.openpty()
+        tty.setraw(self.slave_fd)
+        attrs = termios.tcgetattr(self.slave_fd)
+        attrs[3] &= ~termios.ECHO  # no echo back into the master (nobody reads it)
+        termios.tcsetattr(self.slave_fd, termios.TCSANOW, attrs)
+        self.slave_path = os.ttyname(self.slave_fd)
+        self.lockstep = lockstep
+        self.bytes_written = 0
+
+    def pending(self):
+        """Bytes written but not yet read on the slave side."""
+        buf = fcntl.ioctl(self.slave_fd, termios.FIONREAD, struct.pack("i", 0))
+        return struct.unpack("i", buf)[0]
+
+    def write(self, data):
+        if not data:
+            return
+        before = self.pending() if self.lockstep else 0
+        view = memoryview(data)
+        while view:
+            written = os.write(self.master_fd, view)
+            view = view[written:]
+        self.bytes_written += len(data)
+        if self.lockstep:
+            deadline = time.monotonic() + LOCKSTEP_TIMEOUT_S
+            while self.pending() < before + len(data):
+                if time.monotonic() > deadline:
+                    raise WireError("pty: %d bytes did not reach the slave side" % len(data))
+                time.sleep(0)
+
+    def close(self):
+        for fd in (self.master_fd, self.slave_fd):
+            try:
+                os.close(fd)
+            except OSError:
+                pass
+        self.master_fd = self.slave_fd = -1
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()

@@ -1,0 +1,277 @@
+"""The pure navigation core: camera model, column rule, servo law, reached rule, recovery, path phases.
+
+A kinematic stand-in for the MAV (it moves exactly at the commanded velocity) and an ideal camera drive
+the core tick by tick, so each behaviour is checked without the firmware emulation.
+"""
+import math
+
+import pytest
+
+from crazyflie_app import navigation_core as nc
+from crazyflie_app.navigation_core import Detection, NavigationCore, NavigationParams, Pose, servo_velocity
+
+ALTITUDE = 1.25
+TICK_MS = 10
+FRAME_MS = 100
+PATH = ((0.0, 0.0), (4.0, 0.0))
+DEVIATION_TOLERANCE_M = 0.03
+
+
+class World(object):
+    """The core + a kinematic MAV + an ideal camera (no noise, no latency) over a few trees."""
+
+    def __init__(self, trees, path=PATH, start=(0.0, 0.0), **params):
+        self.params = NavigationParams(cam_latency_ms=0, **params)
+        self.core = NavigationCore(self.params, path)
+        self.x, self.y = start
+        self.vx = self.vy = 0.0
+        self.wind = (0.0, 0.0)  # m/s added to the commanded velocity (a steady push the MAV does not feel)
+        self.t = 0
+        self.trees = list(trees)
+        self.hidden = set(range(len(self.trees)))  # nothing in view during the take-off
+        self.commands = []
+        self.core.start(0)
+        self.run(1200)  # take-off settle at altitude
+        assert self.core.phase == nc.PHASE_FOLLOW_PATH
+        self.hidden = set()
+
+    def pose(self):
+        return Pose(self.x, self.y, ALTITUDE, 0.0, self.vx, self.vy)
+
+    def pixel(self, tx, ty):
+        f = self.params.focal_px
+        return (self.params.cam_width_px / 2 - (ty - self.y) * f / ALTITUDE,
+                self.params.cam_height_px / 2 - (tx - self.x) * f / ALTITUDE)
+
+    def frame(self):
+        dets = []
+        for i, (tx, ty) in enumerate(self.trees):
+            u, v = self.pixel(tx, ty)
+            if i not in self.hidden and 0 <= u <= 352 and 0 <= v <= 288:
+                dets.append(Detection(u, v))
+        return dets
+
+    def run(self, duration_ms, until=None):
+        end = self.t + duration_ms
+        while self.t < end:
+            if self.t % FRAME_MS == 0:
+                detections = self.frame()
+                if detections:
+                    self.core.on_frame(self.t, detections, self.pose())
+            command = self.core.step(self.t, self.pose())
+            self.commands.append((self.t, self.core.phase, command))
+            self.vx, self.vy = (command.vx, command.vy) if command.kind == "hover" else (0.0, 0.0)
+            self.vx += self.wind[0]
+            self.vy += self.wind[1]
+            self.x += self.vx * TICK_MS / 1000.0
+            self.y += self.vy * TICK_MS / 1000.0
+            self.t += TICK_MS
+            if until is not None and until(self):
+                return True
+        return False
+
+    def events(self, kind):
+        return [e for e in self.core.events if e.kind == kind]
+
+
+def test_that_pixels_map_to_the_ground_with_the_design_camera_model():
+    core = NavigationCore(NavigationParams(), PATH)
+    f = 1 / 0.0031
+    pose = Pose(1.0, 2.0, ALTITUDE, 0.0, 0.0, 0.0)
+    # 100 px above the centre is forward, 100 px left of the centre is left (DESIGN.md)
+    assert core.pixel_to_world(176, 44, pose) == pytest.approx((1.0 + 100 * ALTITUDE / f, 2.0))
+    assert core.pixel_to_world(76, 144, pose) == pytest.approx((1.0, 2.0 + 100 * ALTITUDE / f))
+    turned = Pose(1.0, 2.0, ALTITUDE, 90.0, 0.0, 0.0)  # nose to +y: image up is world +y
+    assert core.pixel_to_world(176, 44, turned) == pytest.approx((1.0, 2.0 + 100 * ALTITUDE / f))
+
+
+def test_that_the_camera_mount_offset_moves_the_ground_point():
+    core = NavigationCore(NavigationParams(cam_offset_x_m=0.2), PATH)
+    assert core.pixel_to_world(176, 144, Pose(1.0, 0.0, ALTITUDE, 0.0, 0, 0)) == pytest.approx((1.2, 0.0))
+
+
+def test_that_trees_outside_the_planting_column_are_ignored():
+    # crown 0.35 m x 1.5 = 0.525 m: a tree 0.6 m off the path is outside, 0.3 m off is inside
+    world = World([(0.3, 0.6), (0.3, -0.3)])
+    world.core.on_frame(world.t, world.frame(), world.pose())
+    stored = [(round(t.x, 2), round(t.y, 2)) for t in world.core.memory.trees.values()]
+    assert stored == [(0.3, -0.3)]
+    assert world.core.counters.out_of_column == 1
+
+
+def test_that_the_column_rule_uses_the_current_segment():
+    core = NavigationCore(NavigationParams(), ((0, 0), (4, 0), (4, -1), (0, -1)))
+    core.waypoint_index = 1
+    assert core.in_planting_column(2.0, 0.2) and not core.in_planting_column(2.0, -0.9)
+    core.waypoint_index = 3
+    assert core.in_planting_column(2.0, -0.9) and not core.in_planting_column(2.0, 0.2)
+
+
+def test_that_the_servo_law_saturates_without_turning():
+    vx, vy = servo_velocity(0.3, -0.4, gain=1.0, max_speed=0.1)
+    assert math.hypot(vx, vy) == pytest.approx(0.1)
+    assert vy / vx == pytest.approx(-0.4 / 0.3)
+    assert servo_velocity(0.02, 0.0, gain=0.8, max_speed=0.1) == pytest.approx((0.016, 0.0))
+
+
+def test_that_visual_servoing_approaches_the_tree_monotonically_and_stops_near_its_centre():
+    world = World([(0.4, 0.12)])
+    distances = []
+
+    def watch(w):
+        distances.append(math.hypot(0.4 - w.x, 0.12 - w.y))
+        return bool(w.events("tree_reached"))
+
+    assert world.run(20000, until=watch)
+    approach = distances[next(i for i, (_, p, _) in enumerate(world.commands[-len(distances):])
+                              if p == nc.PHASE_APPROACH):]
+    assert all(b <= a + 1e-4 for a, b in zip(approach, approach[1:]))
+    assert distances[-1] < DEVIATION_TOLERANCE_M
+
+
+def test_that_a_tree_is_not_reached_at_the_40_px_capture_radius_alone():
+    # with the paper's tau only, the tree would count as reached ~0.15 m off centre
+    world = World([(0.4, 0.0)])
+    reached_at = {}
+
+    def watch(w):
+        if w.events("tree_reached") and not reached_at:
+            reached_at["d"] = math.hypot(0.4 - w.x, w.y)
+        return bool(reached_at)
+
+    world.run(20000, until=watch)
+    px_per_m = world.params.focal_px / ALTITUDE
+    assert reached_at["d"] * px_per_m < world.params.settle_radius_px + 1.0
+    assert reached_at["d"] * px_per_m < world.params.capture_radius_px / 4
+
+
+def test_that_one_detection_is_not_enough_to_pick_a_target():
+    world = World([(0.3, 0.0)], min_hits=2)
+    world.core.on_frame(world.t, world.frame(), world.pose())
+    world.core.step(world.t, world.pose())
+    assert world.core.phase == nc.PHASE_FOLLOW_PATH
+    world.core.on_frame(world.t + 100, world.frame(), world.pose())
+    world.core.step(world.t + 100, world.pose())
+    assert world.core.phase == nc.PHASE_APPROACH
+
+
+def test_that_a_lost_target_starts_recovery_and_a_new_detection_resumes_visual_guidance():
+    world = World([(0.35, 0.1)])
+    world.run(5000, until=lambda w: w.core.phase == nc.PHASE_APPROACH)
+    world.hidden.add(0)
+    assert world.run(2000, until=lambda w: w.core.phase == nc.PHASE_RECOVERY)
+    assert world.core.counters.recoveries == 1
+    world.hidden.clear()
+    assert world.run(2000, until=lambda w: w.core.phase == nc.PHASE_APPROACH)
+    assert world.events("reacquired")
+    assert world.run(20000, until=lambda w: bool(w.events("tree_reached")))
+
+
+def test_that_drifting_farther_than_delta_from_s_t_starts_recovery_and_returns_to_it():
+    world = World([(0.35, 0.1)])
+    world.run(5000, until=lambda w: w.core.phase == nc.PHASE_APPROACH)
+    world.x -= 0.8  # a gust carries the MAV away: the tree is out of view and e_d > delta = 0.7 m
+    world.run(20)
+    assert world.core.phase == nc.PHASE_RECOVERY
+    assert "e_d" in world.events("recovery")[0].detail
+    # re-approach by position until the tree is seen again, then reach it visually
+    assert world.run(30000, until=lambda w: bool(w.events("tree_reached")))
+    assert math.hypot(0.35 - world.x, 0.1 - world.y) < DEVIATION_TOLERANCE_M
+
+
+def test_that_a_tree_never_seen_again_is_abandoned_and_the_mission_goes_on():
+    world = World([(0.35, 0.1)], recovery_timeout_ms=3000)
+    world.run(5000, until=lambda w: w.core.phase == nc.PHASE_APPROACH)
+    world.hidden.add(0)
+    assert world.run(6000, until=lambda w: bool(w.events("abandoned")))
+    assert world.core.phase == nc.PHASE_RETURN_TO_PATH
+    assert [v.reached for v in world.core.memory.visited] == [False]
+    assert world.core.counters.abandoned == 1
+
+
+def test_that_return_to_path_runs_after_a_tree_and_ends_on_the_path():
+    # the C app's return-to-path branch could never run
+    world = World([(0.35, 0.2)])
+    assert world.run(20000, until=lambda w: bool(w.events("tree_reached")))
+    assert world.core.phase == nc.PHASE_RETURN_TO_PATH
+    assert world.run(20000, until=lambda w: w.core.phase == nc.PHASE_FOLLOW_PATH)
+    assert abs(world.y) < world.params.return_tolerance_m
+
+
+def test_that_the_target_survives_the_removal_of_another_tree():
+    world = World([(0.35, 0.0)])
+    other, _ = world.core.memory.add(0.0, 0.3, 0, 176, 144, (0, 0))
+    world.run(5000, until=lambda w: w.core.phase == nc.PHASE_APPROACH)
+    target = world.core.target_id
+    world.core.memory.mark_visited(other, world.t, (world.x, world.y))
+    world.run(100)
+    assert world.core.target_id == target
+    assert world.core.memory.get(target).x == pytest.approx(0.35, abs=0.02)
+
+
+def test_that_an_evicted_target_sends_the_mav_back_to_the_path():
+    world = World([(0.35, 0.0)])
+    world.run(5000, until=lambda w: w.core.phase == nc.PHASE_APPROACH)
+    world.core.memory.trees.pop(world.core.target_id)
+    world.run(20)
+    assert world.core.phase in (nc.PHASE_RETURN_TO_PATH, nc.PHASE_FOLLOW_PATH)
+    assert world.core.target_id == 0
+
+
+def test_that_the_last_waypoint_leads_to_landing_and_null_setpoints():
+    world = World([], path=((0.0, 0.0), (0.3, 0.0)))
+    assert world.run(20000, until=lambda w: w.core.phase == nc.PHASE_DONE)
+    heights = [c.z for _, p, c in world.commands if p == nc.PHASE_LAND]
+    assert heights[0] == 0.5 and heights[-1] == 0.15
+    assert world.core.step(world.t, world.pose()).kind == "null"
+
+
+def test_that_a_tree_seen_earlier_but_out_of_view_is_approached_by_memory():
+    # Fixture: a tree stored (2 hits) long ago, not in view now
+    world = World([])
+    tree_id, _ = world.core.memory.add(0.9, 0.1, 0, 176, 144, (0, 0))
+    world.core.memory.update(tree_id, 0.9, 0.1, 0, 176, 144)
+    world.trees.append((0.9, 0.1))
+    world.hidden.add(0)
+    # Test
+    world.run(20)
+    # Assert: it flies to s_t by position (the recovery manoeuvre), not counted as a lost target
+    assert world.core.phase == nc.PHASE_RECOVERY
+    assert world.events("approach_by_memory") and world.core.counters.recoveries == 0
+    world.hidden.clear()
+    assert world.run(30000, until=lambda w: bool(w.events("tree_reached")))
+
+
+STEADY_WIND = (0.0, 0.03)  # m/s sideways: the P law alone would hold the MAV ~3.8 cm (~10 px) off centre
+
+
+def reached_after(world, limit_ms=60000):
+    world.run(5000, until=lambda w: w.core.phase == nc.PHASE_APPROACH)
+    start = world.t
+    assert world.run(limit_ms, until=lambda w: bool(w.events("tree_reached")))
+    return world.t - start, math.hypot(0.35 - world.x, 0.0 - world.y)
+
+
+def test_that_the_servo_integral_cancels_a_steady_push():
+    world = World([(0.35, 0.0)])
+    world.wind = STEADY_WIND
+    duration_ms, deviation = reached_after(world)
+    assert duration_ms < world.params.settle_grace_ms  # no relaxation needed
+    assert deviation < DEVIATION_TOLERANCE_M
+
+
+def test_that_without_integral_the_relaxed_rule_still_finishes_the_tree():
+    world = World([(0.35, 0.0)], servo_integral=0.0)
+    world.wind = STEADY_WIND
+    duration_ms, deviation = reached_after(world)
+    assert duration_ms > world.params.settle_grace_ms
+    assert deviation < 0.06  # the equilibrium offset, not the 0.15 m of tau alone
+
+
+def test_that_a_waypoint_counts_as_passed_once_the_mav_is_beyond_its_segment_end():
+    core = NavigationCore(NavigationParams(), ((0, 0), (4, 0), (4, -1)))
+    core.phase, core.waypoint_index = nc.PHASE_FOLLOW_PATH, 1
+    core.step(0, Pose(3.9, 0.1, ALTITUDE, 0.0, 0.1, 0.0))
+    assert core.waypoint_index == 1
+    core.step(10, Pose(4.05, 0.1, ALTITUDE, 0.0, 0.1, 0.0))  # 0.11 m from the waypoint but past it
+    assert core.waypoint_index == 2

@@ -1,0 +1,75 @@
+"""T_d and the visited list: merging, per-frame exclusivity, visited association, bounded capacities."""
+import pytest
+
+from crazyflie_app.tree_memory import TreeMemory
+
+MERGE_RADIUS = 0.45
+MAV = (0.0, 0.0)
+
+
+def add(memory, x, y, t=0):
+    tree_id, _ = memory.add(x, y, t, 176.0, 144.0, MAV)
+    return tree_id
+
+
+def test_that_a_detection_within_the_merge_radius_is_the_same_tree_and_refines_it():
+    sut = TreeMemory()
+    tree_id = add(sut, 1.0, 0.5)
+    assert sut.associate([(1.1, 0.5)], MERGE_RADIUS) == [("tree", tree_id)]
+    sut.update(tree_id, 1.1, 0.5, 100, 170.0, 140.0)
+    tree = sut.get(tree_id)
+    assert tree.hits == 2 and tree.x == pytest.approx(1.05) and tree.last_ms == 100
+    assert sut.associate([(1.6, 0.5)], MERGE_RADIUS) == [(None, None)]
+
+
+def test_that_two_detections_of_one_frame_never_merge_into_one_tree():
+    # a cluster: trees 0.47 m apart, the second one's estimate lands 0.40 m from the first stored tree
+    sut = TreeMemory()
+    first = add(sut, 2.30, 0.40)
+    result = sut.associate([(2.32, 0.41), (2.70, 0.52)], MERGE_RADIUS)
+    assert result[0] == ("tree", first)
+    assert result[1] == (None, None)
+
+
+def test_that_a_detection_goes_to_the_nearest_of_stored_and_visited_trees():
+    sut = TreeMemory()
+    visited = add(sut, 2.30, 0.40)
+    neighbour = add(sut, 2.74, 0.56)
+    sut.mark_visited(visited, 1000, MAV)
+    # 0.42 m from the visited tree, 0.05 m from its neighbour: it is the neighbour
+    assert sut.associate([(2.70, 0.53)], MERGE_RADIUS) == [("tree", neighbour)]
+    assert sut.associate([(2.31, 0.41)], MERGE_RADIUS) == [("visited", visited)]
+
+
+def test_that_ids_stay_valid_when_another_tree_is_removed():
+    # Navigation.c kept the target as an index into an array that removeCoordinate shifted
+    sut = TreeMemory()
+    ids = [add(sut, x, 0.0) for x in (1.0, 2.0, 3.0)]
+    target = ids[2]
+    sut.mark_visited(ids[0], 10, MAV)
+    assert sut.get(target).x == 3.0
+    assert sut.get(ids[0]) is None
+
+
+def test_that_a_full_memory_evicts_the_farthest_tree_and_counts_it():
+    sut = TreeMemory(capacity=3)
+    near, far, middle = add(sut, 1.0, 0.0), add(sut, 9.0, 0.0), add(sut, 4.0, 0.0)
+    new_id, evicted = sut.add(2.0, 0.0, 0, 176.0, 144.0, MAV)
+    assert evicted == [far]
+    assert set(sut.trees) == {near, middle, new_id}
+    assert sut.evicted == 1 and len(sut) == 3
+
+
+def test_that_the_visited_list_is_bounded_and_overflow_is_counted():
+    # Navigation.c wrote past treeBlacklist[10] on the 11th visited tree
+    sut = TreeMemory(capacity=64, visited_capacity=10)
+    for i in range(25):
+        sut.mark_visited(add(sut, 0.5 * i, 0.0), i, (0.5 * i, 0.0))
+    assert len(sut.visited) == 10
+    assert sut.visited_forgotten == 15
+    assert min(v.x for v in sut.visited) == pytest.approx(0.5 * 15)  # the far (old) ones were forgotten
+
+
+def test_that_capacities_must_be_positive():
+    with pytest.raises(ValueError):
+        TreeMemory(capacity=0)
