@@ -1,0 +1,108 @@
+"""foranav bench detector: speed of the tree detector on one core.
+
+For 352x288, 640x480 and 1280x1024 frames (synthetic palm scenes, crowns scaled with the frame width as
+the camera's lens does): median and p90 milliseconds per frame and frames per second of the fast path
+(whole detect(): HSV, score maps, candidates, per-object tests, NMS), the per-window reference
+implementation of the same pipeline timed on the same frame(s), their ratio, and the peak resident memory.
+The process is pinned to one CPU and OpenCV/BLAS are limited to one thread.
+"""
+import json
+import os
+import resource
+import time
+
+import numpy as np
+
+from host_tools.detection import common, reference, synthetic
+from host_tools.detection.threads import single_threaded
+
+import foranav_detector as detector_core
+
+SIZES = ((352, 288), (640, 480), (1280, 1024))
+FAST_FRAMES = {352: 200, 640: 100, 1280: 40}  # timed frames per size (after warm-up)
+REFERENCE_FRAMES = 1  # the per-window path takes about a second per frame
+CROWNS_AT_352 = (77, 115)  # crown diameters in pixels at 352 px width and 1.25 m altitude
+
+
+def pin_to_one_core():
+    """Pin this process to one CPU; returns the previous CPU set (None if pinning is not possible)."""
+    try:
+        previous = os.sched_getaffinity(0)
+        os.sched_setaffinity(0, {sorted(previous)[0]})
+        return previous
+    except (AttributeError, OSError):
+        return None
+
+
+def frames_for(width, height, seed, count=4):
+    scale = width / 352.0
+    diameters = (CROWNS_AT_352[0] * scale, CROWNS_AT_352[1] * scale)
+    return [synthetic.scene(seed + i, width, height, palms=2, roofs=1, diameter=diameters)[0] for i in range(count)]
+
+
+def time_fast(detector, frames, count):
+    for frame in frames:
+        detector.detect(frame)  # warm-up: plans and buffers for this frame size
+    times = []
+    for i in range(count):
+        frame = frames[i % len(frames)]
+        start = time.perf_counter()
+        detector.detect(frame)
+        times.append(time.perf_counter() - start)
+    return np.array(times) * 1000.0
+
+
+def time_reference(detector, frames, count):
+    times = []
+    for i in range(count):
+        start = time.perf_counter()
+        reference.reference_detect(detector, frames[i % len(frames)])
+        times.append(time.perf_counter() - start)
+    return np.array(times) * 1000.0
+
+
+def measure(seed=0, model_name="oil_palm", sizes=SIZES, fast_frames=None, reference_frames=REFERENCE_FRAMES):
+    previous = pin_to_one_core()
+    try:
+        return _measure(seed, model_name, sizes, fast_frames, reference_frames, previous is not None)
+    finally:
+        if previous is not None:
+            os.sched_setaffinity(0, previous)
+
+
+def _measure(seed, model_name, sizes, fast_frames, reference_frames, pinned):
+    single_threaded()
+    model = common.load(model_name)
+    results = {}
+    for width, height in sizes:
+        detector = detector_core.TreeDetector(model)
+        frames = frames_for(width, height, seed)
+        fast = time_fast(detector, frames, (fast_frames or FAST_FRAMES).get(width, 40))
+        slow = time_reference(detector, frames, reference_frames)
+        median = float(np.median(fast))
+        results["%dx%d" % (width, height)] = {
+            "median_ms": round(median, 3), "p90_ms": round(float(np.percentile(fast, 90)), 3),
+            "fps": round(1000.0 / median, 1), "reference_ms": round(float(np.median(slow)), 1),
+            "speedup_vs_reference": round(float(np.median(slow)) / median, 1),
+            "windows": [round(w) for w in detector.window_sizes(width)],
+        }
+    peak_kb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss  # kilobytes on Linux
+    return {"sizes": results, "peak_rss_mb": round(peak_kb / 1024.0, 1), "one_core": pinned,
+            "model": common.model_path(model_name)}
+
+
+def run(args):
+    result = measure(seed=args.seed)
+    if getattr(args, "json", False):
+        print(json.dumps(result))
+        return 0
+    print("tree detector, one core (%s), model %s" % ("pinned" if result["one_core"] else "not pinned",
+                                                     result["model"]))
+    print("%-10s %9s %9s %8s %13s %9s  %s" % ("frame", "median ms", "p90 ms", "fps", "reference ms", "speed-up",
+                                              "windows px"))
+    for size, r in result["sizes"].items():
+        print("%-10s %9.3f %9.3f %8.1f %13.1f %8.0fx  %s" % (size, r["median_ms"], r["p90_ms"], r["fps"],
+                                                           r["reference_ms"], r["speedup_vs_reference"],
+                                                           ",".join(str(w) for w in r["windows"])))
+    print("peak memory %.1f MB" % result["peak_rss_mb"])
+    return 0

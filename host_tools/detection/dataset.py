@@ -1,0 +1,122 @@
+"""Annotated frames for training and evaluation, and the windows cut from them.
+
+A frame comes from a boxes CSV (host_tools.annotations). A tree is *complete* when its box lies wholly
+inside the frame; only complete trees of the species are positives (the paper's negatives "do not contain
+complete trees"). Windows are square, W = crown size x margin, given by centre and side in frame pixels.
+"""
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from host_tools import annotations
+from host_tools.errors import ForaNavError
+
+import foranav_features as features
+
+EDGE_TOLERANCE_PX = 0.5  # a box this close to the frame edge is taken as cut by it
+
+
+@dataclass
+class Frame:
+    path: str
+    bgr: np.ndarray
+    boxes: list
+    hsv: np.ndarray = field(init=False, repr=False)
+    value: np.ndarray = field(init=False, repr=False)
+
+    def __post_init__(self):
+        self.hsv = features.bgr_to_hsv(self.bgr)
+        self.value = cv2.extractChannel(self.hsv, 2)
+
+    @property
+    def width(self):
+        return self.bgr.shape[1]
+
+    @property
+    def height(self):
+        return self.bgr.shape[0]
+
+    def complete(self, box):
+        x0, y0, x1, y1 = box.corners()
+        return (x0 >= -EDGE_TOLERANCE_PX + 1 and y0 >= -EDGE_TOLERANCE_PX + 1
+                and x1 <= self.width - 1 + EDGE_TOLERANCE_PX and y1 <= self.height - 1 + EDGE_TOLERANCE_PX)
+
+    def trees(self, species):
+        """Complete boxes of the species."""
+        return [b for b in self.boxes if b.label == species and self.complete(b)]
+
+    def window_fits(self, cx, cy, side):
+        return side / 2.0 <= cx <= self.width - side / 2.0 and side / 2.0 <= cy <= self.height - side / 2.0
+
+
+def read_image(path):
+    image = cv2.imread(str(path), cv2.IMREAD_COLOR)
+    if image is None:
+        raise ForaNavError("%s: cannot read image" % path)
+    return image
+
+
+def load_frames(csv_paths, limit=None):
+    """Frames of one or more boxes CSVs (image paths relative to each CSV), in file order."""
+    frames = []
+    for csv_path in csv_paths:
+        csv_path = Path(csv_path)
+        for image, boxes in annotations.boxes_by_image(annotations.read_boxes(csv_path)).items():
+            frames.append(Frame(str(csv_path.parent / image), read_image(csv_path.parent / image), boxes))
+            if limit is not None and len(frames) >= limit:
+                return frames
+    if not frames:
+        raise ForaNavError("no frames in %s" % ", ".join(str(p) for p in csv_paths))
+    return frames
+
+
+def crown_size(box):
+    return max(box.width, box.height)
+
+
+def is_tree_window(frame, species, cx, cy, side, margin, centre_tolerance=0.25, size_tolerance=1.4):
+    """Does this window frame a complete tree of the species well enough to count as a detection of it?"""
+    for box in frame.trees(species):
+        expected = crown_size(box) * margin
+        if (math.hypot(box.x_center - cx, box.y_center - cy) <= centre_tolerance * side
+                and 1.0 / size_tolerance <= side / expected <= size_tolerance):
+            return True
+    return False
+
+
+def near_any_tree(frame, cx, cy, side):
+    """Is a tree (any label, complete or not) centred inside this window? (not usable as background)"""
+    half = side / 2.0
+    return any(abs(b.x_center - cx) < half and abs(b.y_center - cy) < half for b in frame.boxes
+               if b.label and b.label != "")
+
+
+def top_descriptor(frame, cx, cy, side, transform=0):
+    """Top-layer descriptor of a window; transform 0..7 = rot90 count (0-3) and optional mirror (+4)."""
+    small = features.window_with_context(frame.value, cx - side / 2.0, cy - side / 2.0, side)
+    if transform % 4:
+        small = np.rot90(small, transform % 4)
+    if transform >= 4:
+        small = small[:, ::-1]
+    return features.top_layer_hog(np.ascontiguousarray(small))
+
+
+def pixel_window(frame, cx, cy, side):
+    """Integer slices (rows, cols) of a window clipped to the frame."""
+    side = int(round(side))
+    x0 = int(round(cx - side / 2.0))
+    y0 = int(round(cy - side / 2.0))
+    x0 = max(0, min(frame.width - side, x0))
+    y0 = max(0, min(frame.height - side, y0))
+    return slice(y0, y0 + side), slice(x0, x0 + side)
+
+
+def window_cues(frame, cx, cy, side, model):
+    """(hue/saturation similarity, bottom-layer HOG variance) of a window."""
+    rows, cols = pixel_window(frame, cx, cy, side)
+    similarity = features.hs_similarity(frame.hsv[rows, cols], model.template_hue, model.template_sat)
+    variance = features.hog_global_variance(frame.value[rows, cols])
+    return similarity, variance

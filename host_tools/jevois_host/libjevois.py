@@ -1,0 +1,211 @@
+"""A host stand-in for the JeVois ``libjevois`` Python bindings: exactly the names ForaNav's module uses.
+
+Modelled on jevois/src/jevois/Core/PythonSupport.C (1.18+). Semantics kept from the camera:
+- ``sendSerial(line)`` appends the line ending itself (CRLF, the serial port's default); no ``\\n`` in the line.
+- ``Timer(prefix, interval, loglevel)``: ``stop()`` returns "-- fps, --% CPU" until ``interval`` frames were
+  timed, then "<fps> fps, <cpu>% CPU" refreshed every ``interval`` frames; the periodic log line goes to
+  the log stream.
+- ``Parameter(component, name, type, description, default, category)`` has ``get()``/``set()``; values are
+  checked against the type as the engine does.
+- ``InputFrame.getCvBGR()/getCvGRAY()/getCvRGB()`` return copies; ``OutputFrame.sendCv(img)`` rescales to
+  the output size (like the camera) and keeps the image.
+- ``LINFO/LERROR/LDEBUG`` log one string; ``LFATAL`` logs and raises.
+State (serial and log streams, frame counter) is module-level, as on the camera: one module at a time.
+"""
+import sys
+import time
+
+import cv2
+import numpy as np
+
+LOG_DEBUG, LOG_INFO, LOG_ERR, LOG_CRIT = 7, 6, 3, 2
+pro = False
+platform = False  # the JeVois-A33 build of the bindings reports platform False on a host
+version_major, version_minor, version_patch = 1, 23, 0
+
+_serial_stream = None
+_log_stream = sys.stderr
+_line_ending = "\r\n"
+_frame_number = 0
+
+
+def configure(serial_stream=None, log_stream=None, line_ending="\r\n"):
+    """Host only: where sendSerial() and the log go (text or binary streams; None drops serial output)."""
+    global _serial_stream, _log_stream, _line_ending
+    _serial_stream = serial_stream
+    _log_stream = log_stream if log_stream is not None else sys.stderr
+    _line_ending = line_ending
+
+
+def _write(stream, text):
+    if stream is None:
+        return
+    try:
+        stream.write(text)
+    except TypeError:  # binary stream (a pty, a serial port)
+        stream.write(text.encode("ascii", "replace"))
+    if hasattr(stream, "flush"):
+        stream.flush()
+
+
+def sendSerial(string):
+    _write(_serial_stream, str(string) + _line_ending)
+
+
+def frameNum():
+    return _frame_number
+
+
+def _next_frame():
+    global _frame_number
+    _frame_number += 1
+
+
+def _log(prefix, message):
+    _write(_log_stream, "%s %s\n" % (prefix, message))
+
+
+def LDEBUG(message):
+    pass  # compiled out on the camera
+
+
+def LINFO(message):
+    _log("INF", message)
+
+
+def LERROR(message):
+    _log("ERR", message)
+
+
+def LFATAL(message):
+    _log("FTL", message)
+    raise RuntimeError(message)
+
+
+class Timer(object):
+    def __init__(self, prefix, interval, loglevel):
+        self.prefix = str(prefix)
+        self.interval = max(1, int(interval))
+        self.loglevel = int(loglevel)
+        self.text = "-- fps, --% CPU"
+        self._count = 0
+        self._busy = 0.0
+        self._started = None
+        self._window_wall = None
+        self._window_cpu = None
+
+    def start(self):
+        now = time.perf_counter()
+        if self._window_wall is None:
+            self._window_wall, self._window_cpu = now, time.process_time()
+        self._started = now
+
+    def stop(self):
+        if self._started is None:
+            return self.text
+        now = time.perf_counter()
+        self._busy += now - self._started
+        self._count += 1
+        if self._count >= self.interval:
+            wall = max(now - self._window_wall, 1e-9)
+            cpu = 100.0 * (time.process_time() - self._window_cpu) / wall
+            fps = self._count / wall
+            self.text = "%.1f fps, %.1f%% CPU" % (fps, cpu)
+            if self.loglevel == LOG_INFO:
+                LINFO("%s average (%d) duration %.2fms (%.1f fps)"
+                      % (self.prefix, self._count, 1000.0 * self._busy / self._count, fps))
+            self._count, self._busy = 0, 0.0
+            self._window_wall, self._window_cpu = now, time.process_time()
+        return self.text
+
+
+class ParameterCategory(object):
+    def __init__(self, name, description):
+        self.name, self.description = str(name), str(description)
+
+
+_TYPES = {"bool": bool, "char": str, "byte": int, "uint8": int, "int16": int, "uint16": int, "int": int,
+          "int32": int, "uint": int, "uint32": int, "long": int, "int64": int, "uint64": int, "float": float,
+          "double": float, "str": str}
+
+
+class Parameter(object):
+    """A module parameter; the engine's setpar/getpar are host_tools.jevois_host.ModuleRunner.setpar/getpar."""
+
+    def __init__(self, component, name, type_str, description, default, category):
+        if type_str not in _TYPES:
+            raise ValueError("Unsupported parameter type %r; valid: %s" % (type_str, ", ".join(sorted(_TYPES))))
+        self.component, self.name, self.type_str = component, str(name), type_str
+        self.description, self.category = str(description), category
+        self._value = self._convert(default)
+        registry = component.__dict__.setdefault("_jevois_host_parameters", {})
+        if self.name in registry:
+            raise ValueError("Parameter %s already exists" % self.name)
+        registry[self.name] = self
+
+    def _convert(self, value):
+        kind = _TYPES[self.type_str]
+        if kind is bool and isinstance(value, str):
+            if value.lower() not in ("true", "false", "1", "0"):
+                raise ValueError("Parameter %s: bad bool %r" % (self.name, value))
+            return value.lower() in ("true", "1")
+        return kind(value)
+
+    def get(self):
+        return self._value
+
+    def set(self, value):
+        self._value = self._convert(value)
+
+
+def parameters(component):
+    """Host only: {name: Parameter} created by a module instance."""
+    return component.__dict__.get("_jevois_host_parameters", {})
+
+
+class InputFrame(object):
+    """One camera frame (BGR on the host)."""
+
+    def __init__(self, bgr):
+        self._bgr = np.ascontiguousarray(bgr)
+
+    def getCvBGR(self, casync=False):
+        return self._bgr.copy()
+
+    def getCvGRAY(self, casync=False):
+        return cv2.cvtColor(self._bgr, cv2.COLOR_BGR2GRAY)
+
+    def getCvRGB(self, casync=False):
+        return cv2.cvtColor(self._bgr, cv2.COLOR_BGR2RGB)
+
+    def getCvRGBA(self, casync=False):
+        return cv2.cvtColor(self._bgr, cv2.COLOR_BGR2RGBA)
+
+    def done(self):
+        pass
+
+
+class OutputFrame(object):
+    """The USB video output of one frame; keeps what the module sent in ``image`` (BGR)."""
+
+    def __init__(self, width, height):
+        self.width, self.height = int(width), int(height)
+        self.image = None
+
+    def sendCv(self, img, quality=75):
+        if img.ndim == 2:
+            img = cv2.cvtColor(img, cv2.COLOR_GRAY2BGR)
+        elif img.shape[2] == 4:
+            img = cv2.cvtColor(img, cv2.COLOR_BGRA2BGR)
+        if (img.shape[1], img.shape[0]) != (self.width, self.height):
+            img = cv2.resize(img, (self.width, self.height), interpolation=cv2.INTER_AREA)
+        self.image = img.copy()
+
+    def sendCvBGR(self, img, quality=75):
+        if (img.shape[1], img.shape[0]) != (self.width, self.height):
+            raise ValueError("sendCvBGR: image is %dx%d, output is %dx%d"
+                             % (img.shape[1], img.shape[0], self.width, self.height))
+        self.image = img.copy()
+
+    def sendScaledCvBGR(self, img, quality=75):
+        self.sendCv(img, quality)

@@ -1,0 +1,214 @@
+import os
+
+import cv2
+import libjevois as jevois
+
+import foranav_detector
+import foranav_model
+import foranav_serial
+
+SERSTYLES = ("Terse", "Normal")
+FRAMEMARKS = ("Stop", "None")
+SPECIES_FILES = {"oil_palm": "foranav_oil_palm.npz", "citrus": "foranav_citrus.npz", "olive": "foranav_olive.npz"}
+BOX_COLOUR = (0, 255, 0)  # BGR
+TEXT_COLOUR = (255, 255, 255)
+
+
+## Detect oil palm (or citrus, olive) trees with the ForaNav enhanced hierarchical HOG detector
+#
+# Each frame is scanned with square sliding windows of several sizes. A window is a tree when (paper
+# "ForaNav", section III-A): a linear SVM on the HOG of its value channel downscaled to 24x24 px finds the
+# star shape of the fronds; its hue and saturation histograms correlate with the species' template
+# (rejects roofs and road crossings); and the variance of the global orientation histogram of its
+# full-resolution HOG is high enough (needle-like leaflets; rejects other palm species). Overlapping
+# windows are merged and their centres averaged.
+#
+# Serial messages, per frame, best tree first (standardized coordinates, integers):
+#   T2 x y                     (serstyle Terse, default) or
+#   N2 <species> x y w h       (serstyle Normal)
+#   MARK STOP                  end of frame (framemark Stop, default), sent even when no tree is seen so that
+#                              a receiver can tell "frame done, nothing seen" from "link silent".
+#
+# Settings are jevois Parameters (setpar/getpar, params.cfg) and the same at the console through
+# "foranav <name> [<value>]" (see supportedCommands). Model files foranav_<species>.npz sit next to this file.
+#
+# Needs JeVois >= 1.18 (init() and jevois.Parameter); Python 3.7, numpy 1.16 and OpenCV 4 only.
+#
+# @author ForaNav project
+# @displayname ForaNav Trees
+# @videomapping NONE 0 0 0.0 YUYV 352 288 30.0 ForaNav ForaNavTrees
+# @videomapping YUYV 352 288 30.0 YUYV 352 288 30.0 ForaNav ForaNavTrees
+# @email none
+# @mainurl none
+# @license MIT
+# @distribution Unrestricted
+# @restrictions None
+# @ingroup modules
+class ForaNavTrees:
+    # ###################################################################################################
+    ## Constructor: kept cheap (slow constructors upset USB timing); the model is loaded in init()
+    def __init__(self):
+        self.timer = jevois.Timer("ForaNavTrees", 100, jevois.LOG_INFO)
+        self.folder = os.path.dirname(os.path.abspath(__file__))
+        self.detector = None
+        self.loaded = (None, None)  # (species, settings key) the detector was built for
+        self.params = {}
+
+    # ###################################################################################################
+    ## Create the parameters and load the default model
+    def init(self):
+        pc = jevois.ParameterCategory("ForaNav Trees", "ForaNav tree detector settings")
+        self.model = self.loadModel("oil_palm")
+        self.loaded = ("oil_palm", None)  # settings are read on the first frame (after params.cfg)
+        self.addParam(pc, "species", "str", "Species model: oil_palm, citrus, olive, or a .npz file in the "
+                      "module folder", "oil_palm")
+        self.addParam(pc, "svmthresh", "str", "Top-layer SVM score a window must exceed, or auto (the species "
+                      "model's)", "auto")
+        self.addParam(pc, "varthresh", "str", "Bottom-layer global HOG variance a tree must exceed ((grey "
+                      "levels/pixel)^2), or auto (the species model's)", "auto")
+        self.addParam(pc, "hsthresh", "str", "Mean hue/saturation Pearson correlation with the template a "
+                      "tree must exceed, or auto (the species model's)", "auto")
+        self.addParam(pc, "windows", "str", "Window sides in pixels, comma-separated, or auto (the model's, "
+                      "scaled to the frame width)", "auto")
+        self.addParam(pc, "step", "int", "Window step in downscaled pixels: W*step/24 in the frame "
+                      "(8 = W/3 as in the paper)", foranav_detector.DEFAULT_STEP)
+        self.addParam(pc, "maxtrees", "int", "At most this many trees reported per frame, best first",
+                      foranav_detector.DEFAULT_MAX_DETECTIONS)
+        self.addParam(pc, "serstyle", "str", "Serial message per tree: Terse (T2 x y) or Normal "
+                      "(N2 species x y w h)", "Terse")
+        self.addParam(pc, "framemark", "str", "End-of-frame message: Stop (MARK STOP) or None", "Stop")
+
+    def addParam(self, category, name, kind, description, default):
+        self.params[name] = jevois.Parameter(self, name, kind, description, default, category)
+
+    def loadModel(self, species):
+        path = os.path.join(self.folder, SPECIES_FILES.get(species, species))
+        return foranav_model.load_model(path)
+
+    # ###################################################################################################
+    ## Rebuild the detector when a setting changed (cheap comparison every frame)
+    def currentDetector(self):
+        species = self.params["species"].get()
+        key = (species, self.params["svmthresh"].get(), self.params["varthresh"].get(),
+               self.params["hsthresh"].get(), self.params["windows"].get(), self.params["step"].get(),
+               self.params["maxtrees"].get())
+        if self.loaded[1] != key:
+            if self.loaded[0] != species:
+                self.model = self.loadModel(species)
+            settings = foranav_detector.DetectorSettings(
+                svm_threshold=parseThreshold(key[1]), variance_threshold=parseThreshold(key[2]),
+                hs_threshold=parseThreshold(key[3]), window_sizes=parseWindows(key[4]), step=key[5],
+                max_detections=key[6])
+            self.detector = foranav_detector.TreeDetector(self.model, settings)
+            self.loaded = (species, key)
+        return self.detector
+
+    # ###################################################################################################
+    ## Detect and send one serial line per tree, then the end-of-frame mark
+    def detectAndSend(self, img):
+        height, width = img.shape[0], img.shape[1]
+        trees = self.currentDetector().detect(img)
+        normal = self.params["serstyle"].get() == "Normal"
+        for tree in trees:
+            if normal:
+                jevois.sendSerial(foranav_serial.format_n2(self.model.species, tree.x, tree.y, tree.w, tree.h,
+                                                           width, height))
+            else:
+                jevois.sendSerial(foranav_serial.format_t2(tree.x, tree.y, width, height))
+        if self.params["framemark"].get() == "Stop":
+            jevois.sendSerial(foranav_serial.FRAME_STOP)
+        return trees
+
+    # ###################################################################################################
+    ## Process function with no USB output (flight)
+    def processNoUSB(self, inframe):
+        img = inframe.getCvBGR()
+        self.timer.start()
+        self.detectAndSend(img)
+        self.timer.stop()
+
+    # ###################################################################################################
+    ## Process function with USB output (debugging): boxes, scores and the frame rate on the video
+    def process(self, inframe, outframe):
+        img = inframe.getCvBGR()
+        self.timer.start()
+        trees = self.detectAndSend(img)
+        for tree in trees:
+            x0, y0 = int(round(tree.x - tree.w / 2.0)), int(round(tree.y - tree.h / 2.0))
+            x1, y1 = int(round(tree.x + tree.w / 2.0)), int(round(tree.y + tree.h / 2.0))
+            cv2.rectangle(img, (x0, y0), (x1, y1), BOX_COLOUR, 2)
+            cv2.drawMarker(img, (int(round(tree.x)), int(round(tree.y))), BOX_COLOUR, cv2.MARKER_CROSS, 10, 1)
+            cv2.putText(img, "%.2f" % tree.score, (x0 + 3, max(12, y0 + 14)), cv2.FONT_HERSHEY_SIMPLEX, 0.45,
+                        BOX_COLOUR, 1, cv2.LINE_AA)
+        fps = self.timer.stop()
+        cv2.putText(img, "ForaNav %s: %d" % (self.model.species, len(trees)), (3, 15), cv2.FONT_HERSHEY_SIMPLEX,
+                    0.5, TEXT_COLOUR, 1, cv2.LINE_AA)
+        cv2.putText(img, fps, (3, img.shape[0] - 6), cv2.FONT_HERSHEY_SIMPLEX, 0.5, TEXT_COLOUR, 1, cv2.LINE_AA)
+        outframe.sendCv(img)
+
+    # ###################################################################################################
+    ## Console commands: the same settings as the parameters
+    def parseSerial(self, command):
+        words = command.split()
+        if not words or words[0] != "foranav":
+            return "ERR Unsupported command"
+        if len(words) == 1:
+            return " ".join("%s=%s" % (name, self.params[name].get()) for name in sorted(self.params))
+        name = words[1]
+        if name not in self.params:
+            return "ERR Unknown setting %s (one of: %s)" % (name, ", ".join(sorted(self.params)))
+        if len(words) == 2:
+            return "%s=%s" % (name, self.params[name].get())
+        error = checkSetting(name, words[2]) or self.checkSpecies(name, words[2])
+        if error:
+            return "ERR " + error
+        current = self.params[name].get()
+        self.params[name].set(type(current)(words[2]))
+        return ""
+
+    def checkSpecies(self, name, value):
+        if name == "species" and not os.path.isfile(os.path.join(self.folder, SPECIES_FILES.get(value, value))):
+            return "no model file for species %s" % value
+        return ""
+
+    def supportedCommands(self):
+        return ("foranav - list the tree detector settings\n"
+                "foranav <name> - show one setting\n"
+                "foranav <name> <value> - change a setting (species, svmthresh|varthresh|hsthresh <number>|auto, "
+                "windows <px,px>|auto, step, maxtrees, serstyle Terse|Normal, framemark Stop|None)")
+
+
+def parseThreshold(text):
+    """'auto' -> None (the model's threshold); '0.5' -> 0.5."""
+    text = text.strip()
+    return None if text in ("", "auto") else float(text)
+
+
+def parseWindows(text):
+    """'auto' -> None (the model's sizes); '72,96' -> (72.0, 96.0)."""
+    text = text.strip()
+    if text in ("", "auto"):
+        return None
+    return tuple(float(part) for part in text.split(","))
+
+
+def checkSetting(name, value):
+    """'' when value is acceptable for the named setting, otherwise the reason."""
+    try:
+        if name in ("svmthresh", "varthresh", "hsthresh"):
+            parseThreshold(value)
+        elif name in ("step", "maxtrees"):
+            number = int(value)
+            if number < 1 or (name == "step" and number > 24):
+                return "%s out of range" % name
+        elif name == "windows":
+            windows = parseWindows(value)
+            if windows is not None and min(windows) < 24:
+                return "windows must be at least 24 px"
+        elif name == "serstyle" and value not in SERSTYLES:
+            return "serstyle must be one of %s" % ", ".join(SERSTYLES)
+        elif name == "framemark" and value not in FRAMEMARKS:
+            return "framemark must be one of %s" % ", ".join(FRAMEMARKS)
+    except ValueError:
+        return "bad value for %s: %s" % (name, value)
+    return ""

@@ -1,0 +1,387 @@
+# ForaNav tree detector: the pure core (frame in, detections out). Camera and host alike.
+#
+# Pipeline per frame (paper section III-A), cheapest test first:
+#   1. HSV of the frame once (COLOR_BGR2HSV_FULL); the value channel feeds the top layer.
+#   2. For each window size W the value channel is downscaled once by W_d/W; the downscaled frames sit side
+#      by side in one atlas image, whose gradients, orientation votes, cell histograms (on a lattice of
+#      gcd(step, 6) downscaled pixels), block norms and linear SVM scores of EVERY window of every size are
+#      a dozen whole-image operations (see _score_atlas). Nothing is computed or allocated per window.
+#   3. Candidates: windows whose (lightly smoothed) score exceeds svm_threshold and is a local maximum of
+#      its map, refined to sub-step precision by a parabola through the neighbouring scores.
+#   4. Non-maximum suppression across window sizes: candidates are grouped greedily by overlap with the best
+#      remaining one; each group is one object.
+#   5. Only each group's best window gets the per-window tests, cheapest first: hue/saturation similarity
+#      to the species template (rejects roofs, road crossings), then the bottom layer's global HOG variance
+#      on the full-resolution window (rejects other palm species).
+#   6. A group that passes is one detection; its centre is the score^2-weighted mean of the refined centres
+#      of its members near the best one (a few pixels better than any single window on a lattice).
+# Every threshold is a setting (DetectorSettings) whose default comes from the model file.
+import collections
+import math
+
+import cv2
+import numpy as np
+
+import foranav_features as features
+
+Detection = collections.namedtuple("Detection", "x y w h score")  # centre and box in frame pixels
+
+DEFAULT_STEP = 2  # window step in downscaled pixels = W/12 (paper: 8 = W/3, see PAPER_STEP)
+PAPER_STEP = features.HOG_WINDOW // 3
+DEFAULT_NMS_OVERLAP = 0.3  # intersection over union above which two windows are the same object
+DEFAULT_MAX_DETECTIONS = 8
+DEFAULT_SMOOTHING = 1.0  # removes single-window noise peaks; a crown's blob of high scores is wider
+FUSION_RADIUS = 0.15  # windows centred within this fraction of the best window's side are averaged
+MAX_CANDIDATES = 64  # per frame, best first: bounds the work when a frame is full of tree-like texture
+CANDIDATES_PER_DETECTION = 8  # ... raised to this many per allowed detection
+
+
+class DetectorSettings(object):
+    """The detector's tunable settings. None = take the model's value.
+
+    svm_threshold       top-layer linear SVM score a window must exceed (decision boundary = 0)
+    variance_threshold  bottom-layer global HOG variance a detection must exceed ((grey levels/pixel)^2)
+    hs_threshold        mean hue/saturation Pearson correlation with the template a detection must exceed
+    window_sizes        sliding-window sides W in pixels of THIS frame (None: the model's, scaled by
+                        frame width / model reference width and rounded to a multiple of W_d = 24)
+    step                window step in downscaled pixels (1..24; 2 = W/12 default, 8 = W/3 as in the paper)
+    nms_overlap         IoU above which windows are merged into one object
+    smoothing           Gaussian sigma applied to each score map before peaks are taken, in lattice units
+                        (gcd(step, 6) downscaled pixels: W/12 by default); 0 = none
+    max_detections      at most this many detections per frame, best first
+    """
+
+    def __init__(self, svm_threshold=None, variance_threshold=None, hs_threshold=None, window_sizes=None,
+                 step=DEFAULT_STEP, nms_overlap=DEFAULT_NMS_OVERLAP, max_detections=DEFAULT_MAX_DETECTIONS,
+                 smoothing=DEFAULT_SMOOTHING):
+        self.svm_threshold = svm_threshold
+        self.variance_threshold = variance_threshold
+        self.hs_threshold = hs_threshold
+        self.window_sizes = tuple(window_sizes) if window_sizes else None
+        self.step = int(step)
+        self.nms_overlap = float(nms_overlap)
+        self.max_detections = int(max_detections)
+        self.smoothing = float(smoothing)
+        if not 1 <= self.step <= features.HOG_WINDOW:
+            raise ValueError("step must be 1..%d downscaled pixels" % features.HOG_WINDOW)
+        if not 0.0 < self.nms_overlap < 1.0:
+            raise ValueError("nms_overlap must be between 0 and 1")
+        if self.max_detections < 1:
+            raise ValueError("max_detections must be at least 1")
+
+
+def model_window_sizes(model, frame_width):
+    """The model's window sizes for a frame of this width: scaled with the width (the lens' pixels per
+    metre scale with it), rounded to a multiple of W_d so that downscaling is an exact block average."""
+    factor = frame_width / float(model.reference_width)
+    sizes = []
+    for window in model.window_sizes:
+        rounded = max(1, int(round(window * factor / features.HOG_WINDOW))) * features.HOG_WINDOW
+        if rounded not in sizes:
+            sizes.append(rounded)
+    return tuple(sizes)
+
+
+class _ScalePlan(object):
+    """Everything about one window size that depends only on the frame shape: computed once, reused."""
+
+    def __init__(self, frame_height, frame_width, window, step):
+        self.window = float(window)
+        self.scale = features.HOG_WINDOW / self.window
+        factor = int(round(self.window)) // features.HOG_WINDOW
+        if factor * features.HOG_WINDOW == self.window:
+            # Integer factor: crop to whole blocks so that every downscaled pixel is an exact block mean
+            # (cv2's INTER_AREA fast path) and any window equals its own crop, downscaled.
+            self.crop_height = frame_height // factor * factor
+            self.crop_width = frame_width // factor * factor
+        else:
+            self.crop_height, self.crop_width = frame_height, frame_width
+        probe = cv2.resize(np.zeros((self.crop_height, self.crop_width), np.uint8), None, fx=self.scale,
+                           fy=self.scale, interpolation=cv2.INTER_AREA)
+        self.small_height, self.small_width = probe.shape
+        self.lattice = math.gcd(step, features.HOG_CELL)  # cell histograms are computed every `lattice` px
+        self.stride = step // self.lattice  # window step in lattice units
+        cell = features.HOG_CELL // self.lattice  # one cell in lattice units
+        cells_per_window = features.HOG_WINDOW // features.HOG_CELL
+        self.map_height = self.small_height // self.lattice - cells_per_window * cell + 1
+        self.map_width = self.small_width // self.lattice - cells_per_window * cell + 1
+        self.usable = self.map_height > 0 and self.map_width > 0
+        self.atlas_row = self.atlas_col = 0  # where the downscaled frame sits in the atlas (set by _Atlas)
+
+    def window_origin(self, row, col):
+        """Frame-pixel origin (x0, y0) of the window at (row, col) of this size's score map."""
+        unit = self.stride * self.lattice / self.scale
+        return col * unit, row * unit
+
+
+class _Atlas(object):
+    """One image holding every window size's downscaled frame side by side, each with a one-pixel
+    replicated border, so that gradients, orientation binning, cell histograms, block norms and scores are
+    computed once per frame for all sizes (a dozen whole-image operations instead of a dozen per size).
+    Each downscaled frame starts on the lattice, so its windows are a plain slice of the atlas' score map."""
+
+    def __init__(self, plans):
+        self.plans = [p for p in plans if p.usable]
+        g = self.plans[0].lattice
+        col = 0
+        for plan in self.plans:
+            plan.atlas_row = g  # room for the border row above, on the lattice
+            plan.atlas_col = _round_up(col + 1, g)
+            col = plan.atlas_col + plan.small_width + 1
+        height = _round_up(g + max(p.small_height for p in self.plans) + 1, g)
+        width = _round_up(col, g)
+        self.image = np.zeros((height, width), np.uint8)
+        self.lattice = g
+        self.cell = features.HOG_CELL // g
+        # Work buffers, reused every frame (fresh megabyte-sized arrays would cost page faults each frame).
+        # Per-bin data is planar, one (height, width) image per bin: single-channel look-ups, products and
+        # block means are several times faster than on a 9-channel interleaved image.
+        bins = features.HOG_BINS
+        self.weights = np.empty((bins, height, width), np.uint8)
+        self.votes = np.empty((bins, height, width), np.uint16)
+        self.lattice_votes = np.empty((bins * height // g, width // g), np.uint16)
+
+    def fill(self, value):
+        for plan in self.plans:
+            small = cv2.resize(value[:plan.crop_height, :plan.crop_width], None, fx=plan.scale, fy=plan.scale,
+                               interpolation=cv2.INTER_AREA)
+            self.image[plan.atlas_row - 1:plan.atlas_row + plan.small_height + 1,
+                       plan.atlas_col - 1:plan.atlas_col + plan.small_width + 1] = cv2.copyMakeBorder(
+                small, 1, 1, 1, 1, cv2.BORDER_REPLICATE)
+        return self.image
+
+    def split(self, scores):
+        """[(plan, score map)] from the atlas' score map."""
+        g = self.lattice
+        out = []
+        for plan in self.plans:
+            row, col = plan.atlas_row // g, plan.atlas_col // g
+            region = scores[row:row + plan.map_height:plan.stride, col:col + plan.map_width:plan.stride]
+            out.append((plan, np.ascontiguousarray(region)))
+        return out
+
+
+class TreeDetector(object):
+    """Detects trees of the model's species in BGR frames. Keeps per-frame-shape plans between calls."""
+
+    def __init__(self, model, settings=None):
+        self.model = model
+        self.settings = settings or DetectorSettings()
+        # The SVM weights regrouped as (bin, block row, block col, cell row, cell col) for _score_atlas.
+        blocks = (features.HOG_WINDOW // features.HOG_CELL - features.HOG_BLOCK) // features.HOG_BLOCK_STRIDE + 1
+        self._blocks = blocks
+        weights = model.svm_weights.reshape(blocks, blocks, features.HOG_BLOCK, features.HOG_BLOCK,
+                                            features.HOG_BINS)
+        self._cell_weights = np.ascontiguousarray(
+            weights.transpose(4, 0, 1, 2, 3).reshape(features.HOG_BINS, -1)).astype(np.float32)
+        self._bin_tables = [np.ascontiguousarray(features.SOFT_BIN_TABLE_U8[:, b]) for b in range(features.HOG_BINS)]
+        self._plans = {}
+        self._template_hue = features.smooth_histogram(model.template_hue)
+        self._template_sat = features.smooth_histogram(model.template_sat)
+
+    # -- settings resolved against the model --------------------------------------------------------------
+
+    def threshold(self, name):
+        value = getattr(self.settings, name)
+        return float(getattr(self.model, name) if value is None else value)
+
+    def window_sizes(self, frame_width):
+        return self.settings.window_sizes or model_window_sizes(self.model, frame_width)
+
+    def plans(self, frame_height, frame_width):
+        return self._atlas(frame_height, frame_width).plans
+
+    def _atlas(self, frame_height, frame_width):
+        key = (frame_height, frame_width, self.window_sizes(frame_width), self.settings.step)
+        if key not in self._plans:
+            plans = [_ScalePlan(frame_height, frame_width, w, self.settings.step) for w in key[2]]
+            if not any(p.usable for p in plans):
+                raise ValueError("window sizes %s do not fit a %dx%d frame"
+                                 % (", ".join("%g" % w for w in key[2]), frame_width, frame_height))
+            self._plans = {key: _Atlas(plans)}  # one frame shape at a time: bounded memory
+        return self._plans[key]
+
+    # -- the pipeline -------------------------------------------------------------------------------------
+
+    def detect(self, bgr, hsv=None):
+        """Trees in one BGR frame -> list of Detection, best first (centre x, y, box w, h, SVM score)."""
+        hsv = features.bgr_to_hsv(bgr) if hsv is None else hsv
+        value = cv2.extractChannel(hsv, 2)
+        maps = self.score_maps(value)
+        return self.detections_from_maps(maps, hsv, value)
+
+    def score_maps(self, value):
+        """[(plan, score map)] of every window of every size, from the full-resolution value channel."""
+        atlas = self._atlas(*value.shape)
+        atlas.fill(value)
+        return atlas.split(self._score_atlas(atlas))
+
+    def detections_from_maps(self, maps, hsv, value):
+        """Steps 3-6: candidates, grouping, per-object tests, fused centres (shared with the reference)."""
+        svm_threshold = self.threshold("svm_threshold")
+        candidates = []
+        for plan, scores in maps:
+            if self.settings.smoothing > 0:  # the peak of a tree's blob of high scores, not of its noise
+                scores = cv2.GaussianBlur(scores, (0, 0), self.settings.smoothing / plan.stride)
+            candidates.extend(_local_maxima(plan, scores, svm_threshold))
+        candidates.sort(key=lambda c: -c[0])
+        del candidates[max(MAX_CANDIDATES, CANDIDATES_PER_DETECTION * self.settings.max_detections):]
+        detections = []
+        for group in _group(candidates, self.settings.nms_overlap):
+            if self._passes_window_tests(group[0], hsv, value):
+                detections.append(_fuse(group, svm_threshold, self.model.window_margin))
+                if len(detections) == self.settings.max_detections:
+                    break
+        return detections
+
+    def _passes_window_tests(self, candidate, hsv, value):
+        x0, y0, side = _pixel_window(candidate, value.shape)
+        similarity = features.hs_similarity_to_smoothed(hsv[y0:y0 + side, x0:x0 + side], self._template_hue,
+                                                        self._template_sat)
+        if similarity <= self.threshold("hs_threshold"):
+            return False
+        variance = features.hog_global_variance(value[y0:y0 + side, x0:x0 + side])
+        return variance > self.threshold("variance_threshold")
+
+    def _score_atlas(self, atlas):
+        """Linear SVM score of the window at every lattice position of the atlas (g px apart; o = lattice
+        units per cell).
+
+        With cell histograms H on the lattice, block norms N and the weights w regrouped per (block, cell):
+            score(p) = bias + sum_blocks [ sum_cells w_{block,cell} . H(p + block + cell) ] / N(p + block)
+        computed as a few whole-image operations.
+        """
+        g, o, bins, k, n = atlas.lattice, atlas.cell, features.HOG_BINS, features.HOG_BLOCK, self._blocks
+        codes, levels = features.gradient_levels(atlas.image)
+        for b in range(bins):  # each pixel's vote for bin b: magnitude code x soft-binning weight (uint16)
+            cv2.LUT(levels, self._bin_tables[b], dst=atlas.weights[b])
+            cv2.multiply(atlas.weights[b], codes, dst=atlas.votes[b], dtype=cv2.CV_16U)
+        height, width = atlas.image.shape
+        if g > 1:  # mean votes over g x g pixels (exact block mean): the lattice the cells are added from
+            votes = cv2.resize(atlas.votes.reshape(bins * height, width), (width // g, bins * height // g),
+                               dst=atlas.lattice_votes, interpolation=cv2.INTER_AREA)
+            votes = votes.reshape(bins, height // g, width // g)
+        else:
+            votes = atlas.votes
+        planes = votes.astype(np.float32)
+        planes *= g * g * features.VOTE_UNIT
+        cells = _box_sum(planes, o)  # cell histograms at every lattice position: (bins, rows, cols)
+        # Block norms: sum of squared cell histograms over k x k cells, one map.
+        energy = _box_sum(np.einsum("bij,bij->ij", cells, cells), o, k, step=o)
+        inverse_norm = 1.0 / np.sqrt(energy + features.BLOCK_NORM_EPS ** 2)
+        # Per (block, cell) responses w . H as maps (block row, block col, cell row, cell col, rows, cols),
+        # then summed over the cells of each block.
+        rows, cols = cells.shape[1], cells.shape[2]
+        responses = self._cell_weights.T.dot(cells.reshape(bins, -1)).reshape(n, n, k, k, rows, cols)
+        width = cols - (k - 1) * o
+        row_sum = responses[:, :, :, 0, :, 0:width].copy()
+        for c in range(1, k):
+            row_sum += responses[:, :, :, c, :, c * o:c * o + width]
+        height = rows - (k - 1) * o
+        block_sum = row_sum[:, :, 0, 0:height, :].copy()
+        for r in range(1, k):
+            block_sum += row_sum[:, :, r, r * o:r * o + height, :]
+        # Window score: blocks at offsets (by, bx) x block stride.
+        bs = features.HOG_BLOCK_STRIDE * o
+        map_height = height - (n - 1) * bs
+        map_width = width - (n - 1) * bs
+        scores = np.full((map_height, map_width), self.model.svm_bias, np.float32)
+        for by in range(n):
+            for bx in range(n):
+                rows = slice(by * bs, by * bs + map_height)
+                cols = slice(bx * bs, bx * bs + map_width)
+                scores += block_sum[by, bx, rows, cols] * inverse_norm[rows, cols]
+        return scores
+
+
+def _round_up(value, multiple):
+    return -(-value // multiple) * multiple
+
+
+def _box_sum(array, size, count=None, step=1):
+    """Sums over the last two axes of `count` entries spaced `step` apart (default: `size` consecutive)."""
+    if count is None:
+        count, step = size, 1
+    span = (count - 1) * step
+    height = array.shape[-2] - span
+    width = array.shape[-1] - span
+    rows = array[..., 0:height, :].copy()
+    for i in range(1, count):
+        rows += array[..., i * step:i * step + height, :]
+    out = rows[..., 0:width].copy()
+    for j in range(1, count):
+        out += rows[..., j * step:j * step + width]
+    return out
+
+
+def _local_maxima(plan, scores, threshold):
+    """Candidates (score, centre x, centre y, window) at local maxima of one score map above threshold."""
+    if not (scores > threshold).any():
+        return []
+    peaks = (scores > threshold) & (scores >= cv2.dilate(scores, np.ones((3, 3), np.uint8)))
+    rows, cols = np.nonzero(peaks)
+    out = []
+    for row, col in zip(rows.tolist(), cols.tolist()):
+        dy = _parabola_offset(scores, row, col, 1, 0)
+        dx = _parabola_offset(scores, row, col, 0, 1)
+        x0, y0 = plan.window_origin(row + dy, col + dx)
+        out.append((float(scores[row, col]), x0 + plan.window / 2.0, y0 + plan.window / 2.0, plan.window))
+    return out
+
+
+def _parabola_offset(scores, row, col, drow, dcol):
+    """Sub-step position of a peak from the parabola through it and its two neighbours (-0.5..0.5)."""
+    r0, c0, r1, c1 = row - drow, col - dcol, row + drow, col + dcol
+    if r0 < 0 or c0 < 0 or r1 >= scores.shape[0] or c1 >= scores.shape[1]:
+        return 0.0
+    before, here, after = float(scores[r0, c0]), float(scores[row, col]), float(scores[r1, c1])
+    curvature = before - 2.0 * here + after
+    if curvature >= 0:
+        return 0.0
+    return max(-0.5, min(0.5, 0.5 * (before - after) / curvature))
+
+
+def _iou(a, b):
+    """Intersection over union of two square windows given as (score, cx, cy, side)."""
+    ha, hb = a[3] / 2.0, b[3] / 2.0
+    dx = min(a[1] + ha, b[1] + hb) - max(a[1] - ha, b[1] - hb)
+    dy = min(a[2] + ha, b[2] + hb) - max(a[2] - ha, b[2] - hb)
+    if dx <= 0 or dy <= 0:
+        return 0.0
+    inter = dx * dy
+    return inter / (a[3] * a[3] + b[3] * b[3] - inter)
+
+
+def _group(candidates, overlap):
+    """Greedy NMS on candidates sorted best first: each group = the best remaining + those overlapping it."""
+    remaining = list(candidates)
+    while remaining:
+        best = remaining[0]
+        group = [c for c in remaining if c is best or _iou(best, c) > overlap]
+        remaining = [c for c in remaining if not (c is best or _iou(best, c) > overlap)]
+        yield group
+
+
+def _fuse(group, threshold, margin):
+    """One Detection from a group: the best window's score; centre and size are the mean of the windows
+    centred within FUSION_RADIUS of the best one, weighted by (score - threshold)^2 so that strong, well
+    placed windows dominate and the off-centre side peaks of neighbouring sizes do not pull the centre."""
+    best = group[0]
+    radius = FUSION_RADIUS * best[3]
+    group = [c for c in group if (c[1] - best[1]) ** 2 + (c[2] - best[2]) ** 2 <= radius * radius]
+    weights = [max(c[0] - threshold, 1e-6) ** 2 for c in group]
+    total = sum(weights)
+    cx = sum(w * c[1] for w, c in zip(weights, group)) / total
+    cy = sum(w * c[2] for w, c in zip(weights, group)) / total
+    side = sum(w * c[3] for w, c in zip(weights, group)) / total / margin
+    return Detection(cx, cy, side, side, group[0][0])
+
+
+def _pixel_window(candidate, shape):
+    """Integer (x0, y0, side) of a candidate's window, kept inside the frame."""
+    side = int(round(candidate[3]))
+    x0 = int(round(candidate[1] - side / 2.0))
+    y0 = int(round(candidate[2] - side / 2.0))
+    x0 = max(0, min(shape[1] - side, x0))
+    y0 = max(0, min(shape[0] - side, y0))
+    return x0, y0, side

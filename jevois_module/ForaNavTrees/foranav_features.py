@@ -1,0 +1,233 @@
+# ForaNav tree detector: the feature definitions shared by training, the camera and the host tools.
+#
+# Runs on the JeVois-A33 (Python 3.7, numpy 1.16, OpenCV 4.10) and on the host. One definition of each
+# feature lives here, so that a model trained on the host scores the same numbers on the camera.
+#
+# Paper section III-A (hierarchical HOG + colour check), per sliding window of W x W pixels:
+#   top layer     the window's value channel downscaled to W_d = 24 px; HOG with 6 px cells, blocks of
+#                 3x3 cells, block stride 1 cell, 9 unsigned orientation bins -> 2x2 blocks x 81 = 324 numbers,
+#                 scored by a linear SVM (the star shape of the fronds);
+#   bottom layer  the full-resolution value window; its global 9-bin orientation histogram (the sum of all
+#                 its HOG cell histograms, per pixel); the variance of those 9 numbers must exceed a
+#                 threshold (needle-like leaflets: much gradient energy, unevenly spread over orientations);
+#   colour        256-bin hue and saturation histograms; the mean of their Pearson correlations with the
+#                 species template must exceed a threshold (rejects roofs and road crossings).
+#
+# Conventions (host and camera alike):
+# - HSV is OpenCV's COLOR_BGR2HSV_FULL: hue 0..255 covers the full circle, so 256 hue bins are all used.
+# - Gradients use the [-1, 0, 1] kernel (paper eq. 1-2) with replicated borders.
+# - Orientation is unsigned (0..180 deg). It is quantized to 256 levels of the full circle
+#   (cv2.convertScaleAbs of the angle; 1.4 deg steps) and spread linearly over the two nearest of the 9 bins
+#   with an 8-bit look-up table (weights in 1/255). The magnitude is quantized to 8 bits too
+#   (MAGNITUDE_CODE_SCALE codes per grey level). A pixel's vote is the integer product code x weight, so
+#   binning is table look-ups and 8/16-bit arithmetic on the camera, and the fast per-frame path and the
+#   per-window reference count the same votes. Histograms are reported back in grey levels.
+# - Blocks are L2-normalised (Dalal-Triggs' L2-norm with a small epsilon). L2-Hys clipping is left out on
+#   purpose: without it, a linear SVM's score is linear in the cell histograms divided by one norm per block,
+#   which lets the detector score every window of a frame at once.
+import cv2
+import numpy as np
+
+HOG_WINDOW = 24  # W_d: top-layer window side after downscaling, pixels
+HOG_CELL = 6  # C: cell side, pixels
+HOG_BLOCK = 3  # B: block side, cells
+HOG_BLOCK_STRIDE = 1  # S: block stride, cells
+HOG_BINS = 9  # n: unsigned orientation bins over 0..180 deg
+BLOCK_NORM_EPS = 1.0  # added in quadrature to a block's L2 norm (grey levels); keeps flat blocks near 0
+ANGLE_LEVELS = 256  # orientation quantization levels over 0..360 deg
+HS_BINS = 256  # hue and saturation histogram bins
+HS_SMOOTHING_BINS = 4.0  # Gaussian sigma applied to both histograms before correlating them (0 = none)
+
+
+def _soft_bin_table(n_bins=HOG_BINS, levels=ANGLE_LEVELS):
+    """(levels, n_bins) float32: weight of each bin for each quantized angle level (linear interpolation)."""
+    degrees = (np.arange(levels) * 360.0 / levels) % 180.0
+    bin_width = 180.0 / n_bins
+    position = degrees / bin_width - 0.5  # bin centres at (k + 0.5) * bin_width
+    lower = np.floor(position)
+    upper_weight = position - lower
+    table = np.zeros((levels, n_bins), np.float32)
+    rows = np.arange(levels)
+    table[rows, lower.astype(int) % n_bins] += (1.0 - upper_weight).astype(np.float32)
+    table[rows, (lower.astype(int) + 1) % n_bins] += upper_weight.astype(np.float32)
+    return table
+
+
+SOFT_BIN_TABLE = _soft_bin_table()
+SOFT_BIN_TABLE_U8 = np.round(SOFT_BIN_TABLE * 255.0).astype(np.uint8)  # votes in 1/255
+MAGNITUDE_CODE_SCALE = 0.7  # magnitude codes per grey level: the largest [-1,0,1] magnitude, 360.6, -> 252
+VOTE_UNIT = 1.0 / (255.0 * MAGNITUDE_CODE_SCALE)  # grey levels per unit of code x weight
+
+
+def bgr_to_hsv(bgr):
+    """The project's HSV: cv2.COLOR_BGR2HSV_FULL (hue 0..255 for the full circle)."""
+    return cv2.cvtColor(bgr, cv2.COLOR_BGR2HSV_FULL)
+
+
+def gradient_levels(gray):
+    """8-bit gradient magnitude code and quantized orientation level of every pixel: (code, level), uint8.
+
+    [-1, 0, 1] kernels with replicated borders, as in the paper's equations (1)-(2); code = magnitude x
+    MAGNITUDE_CODE_SCALE rounded; level = angle x 256/360 rounded (360 deg saturates at 255 = 358.6 deg).
+    """
+    gx = cv2.Sobel(gray, cv2.CV_32F, 1, 0, ksize=1, borderType=cv2.BORDER_REPLICATE)
+    gy = cv2.Sobel(gray, cv2.CV_32F, 0, 1, ksize=1, borderType=cv2.BORDER_REPLICATE)
+    magnitude, angle = cv2.cartToPolar(gx, gy, angleInDegrees=True)
+    codes = cv2.convertScaleAbs(magnitude, alpha=MAGNITUDE_CODE_SCALE)
+    levels = cv2.convertScaleAbs(angle, alpha=ANGLE_LEVELS / 360.0)
+    return codes, levels
+
+
+def orientation_histogram(codes, levels):
+    """Magnitude-weighted 9-bin histogram (float64, grey levels) of the given pixels."""
+    per_level = np.bincount(levels.ravel(), weights=codes.ravel().astype(np.float64), minlength=ANGLE_LEVELS)
+    return per_level.dot(SOFT_BIN_TABLE_U8.astype(np.float64)) * VOTE_UNIT
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Bottom layer
+
+
+def global_orientation_histogram(value_window_uint8):
+    """The bottom layer's global 9-bin HOG histogram: the sum of all cell histograms of the full-resolution
+    window, divided by its pixel count (grey levels of gradient per pixel per bin)."""
+    value = np.asarray(value_window_uint8)
+    if value.ndim != 2 or value.size == 0:
+        raise ValueError("value window must be a non-empty 2-D array")
+    codes, levels = gradient_levels(value)
+    return orientation_histogram(codes, levels) / float(value.size)
+
+
+def hog_global_variance(value_window_uint8):
+    """Var_hog (paper eq. 5): population variance of the bottom layer's global 9-bin histogram.
+
+    Units: (grey levels per pixel)^2. Fine, needle-like texture carries much gradient energy, so oil palm
+    crowns score high; smooth crowns and flat ground score low.
+    """
+    return float(np.var(global_orientation_histogram(value_window_uint8)))
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Colour
+
+
+def hs_histograms(hsv_window_uint8):
+    """(hue_hist, sat_hist): 256-bin float32 pixel counts of an HSV_FULL window."""
+    hsv = np.ascontiguousarray(hsv_window_uint8)
+    if hsv.ndim != 3 or hsv.shape[2] != 3 or hsv.size == 0:
+        raise ValueError("HSV window must be a non-empty H x W x 3 array")
+    hue = cv2.calcHist([hsv], [0], None, [HS_BINS], [0, 256]).ravel()
+    sat = cv2.calcHist([hsv], [1], None, [HS_BINS], [0, 256]).ravel()
+    return hue, sat
+
+
+def pearson(a, b):
+    """Pearson correlation of two histograms (paper eq. 6); 0 when either is constant."""
+    a = np.asarray(a, np.float64).ravel()
+    b = np.asarray(b, np.float64).ravel()
+    da = a - a.mean()
+    db = b - b.mean()
+    denominator = np.sqrt(da.dot(da) * db.dot(db))
+    return float(da.dot(db) / denominator) if denominator > 0 else 0.0
+
+
+def smooth_histogram(histogram, sigma=HS_SMOOTHING_BINS):
+    """Gaussian-smoothed copy (float32) of a 1-D histogram (its ends reflected).
+
+    Raw 256-bin histograms of a few thousand pixels are spiky, and a slight change of light or white
+    balance moves every spike: their Pearson correlation then measures the noise. Smoothing both sides
+    over a few bins makes the comparison about the colour distribution's shape.
+    """
+    histogram = np.asarray(histogram, np.float32).reshape(1, -1)
+    if sigma <= 0:
+        return histogram.ravel()
+    return cv2.GaussianBlur(histogram, (0, 0), sigmaX=sigma, borderType=cv2.BORDER_REFLECT).ravel()
+
+
+def hs_similarity(hsv_window, template_h, template_s):
+    """Mean of the Pearson correlations (paper eq. 6) of the window's hue and saturation histograms with the
+    template's, both smoothed by HS_SMOOTHING_BINS (-1..1; 1 = same colour distribution)."""
+    return hs_similarity_to_smoothed(hsv_window, smooth_histogram(template_h), smooth_histogram(template_s))
+
+
+def hs_similarity_to_smoothed(hsv_window, smooth_template_h, smooth_template_s):
+    """hs_similarity with the template histograms already smoothed (the detector smooths them once)."""
+    hue, sat = hs_histograms(hsv_window)
+    return 0.5 * (pearson(smooth_histogram(hue), smooth_template_h) + pearson(smooth_histogram(sat),
+                                                                              smooth_template_s))
+
+
+# ---------------------------------------------------------------------------------------------------------
+# Top layer
+
+
+def hog_descriptor_length(window=HOG_WINDOW, cell=HOG_CELL, block=HOG_BLOCK, stride=HOG_BLOCK_STRIDE,
+                          bins=HOG_BINS):
+    """Descriptor length: blocks per side squared x cells per block x bins (324 for the paper's values)."""
+    cells = window // cell
+    blocks = (cells - block) // stride + 1
+    return blocks * blocks * block * block * bins
+
+
+def downscale_value(value, window):
+    """The value image scaled by W_d / W with area averaging (the top layer's input)."""
+    scale = HOG_WINDOW / float(window)
+    return cv2.resize(value, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)
+
+
+def top_layer_hog(small_value):
+    """Top-layer HOG descriptor (324 float32) of one downscaled value window.
+
+    ``small_value`` is W_d x W_d, or (W_d + 2) x (W_d + 2) with one pixel of context on each side so that
+    the border gradients see the neighbouring pixels (as when the whole frame is processed at once).
+    Order: block row, block column, cell row in block, cell column in block, bin.
+    """
+    small_value = np.asarray(small_value)
+    side = small_value.shape[0]
+    if small_value.shape != (side, side) or side not in (HOG_WINDOW, HOG_WINDOW + 2):
+        raise ValueError("top-layer window must be %dx%d or %dx%d" % (HOG_WINDOW, HOG_WINDOW,
+                                                                      HOG_WINDOW + 2, HOG_WINDOW + 2))
+    codes, levels = gradient_levels(small_value)
+    if side == HOG_WINDOW + 2:
+        codes, levels = codes[1:-1, 1:-1], levels[1:-1, 1:-1]
+    n_cells = HOG_WINDOW // HOG_CELL
+    cells = np.zeros((n_cells, n_cells, HOG_BINS))
+    for row in range(n_cells):
+        for col in range(n_cells):
+            rows = slice(row * HOG_CELL, (row + 1) * HOG_CELL)
+            cols = slice(col * HOG_CELL, (col + 1) * HOG_CELL)
+            cells[row, col] = orientation_histogram(codes[rows, cols], levels[rows, cols])
+    n_blocks = (n_cells - HOG_BLOCK) // HOG_BLOCK_STRIDE + 1
+    blocks = []
+    for row in range(n_blocks):
+        for col in range(n_blocks):
+            r0, c0 = row * HOG_BLOCK_STRIDE, col * HOG_BLOCK_STRIDE
+            block = cells[r0:r0 + HOG_BLOCK, c0:c0 + HOG_BLOCK].ravel()
+            blocks.append(block / np.sqrt(block.dot(block) + BLOCK_NORM_EPS ** 2))
+    return np.concatenate(blocks).astype(np.float32)
+
+
+def window_with_context(value, x0, y0, window):
+    """The top layer's input for the window at (x0, y0) of a full-resolution value image: the window plus one
+    downscaled pixel of context per side, downscaled to (W_d + 2)^2; where the frame ends, the window's own
+    border pixels are replicated (as cv2.Sobel does on a whole downscaled frame).
+
+    x0, y0 and the context are rounded to whole pixels; for windows that are a multiple of W_d and origins
+    on the W / W_d grid this equals cropping ``downscale_value(value, window)`` with one pixel around.
+    """
+    pad = int(round(window / float(HOG_WINDOW)))
+    x0, y0, side = int(round(x0)), int(round(y0)), int(round(window))
+    height, width = value.shape[:2]
+    if x0 < 0 or y0 < 0 or x0 + side > width or y0 + side > height:  # window leaves the frame: replicate it
+        x_lo, y_lo = max(0, x0), max(0, y0)
+        x_hi, y_hi = min(width, x0 + side), min(height, y0 + side)
+        if x_lo >= x_hi or y_lo >= y_hi:
+            raise ValueError("window lies outside the frame")
+        inside = cv2.copyMakeBorder(value[y_lo:y_hi, x_lo:x_hi], y_lo - y0, y0 + side - y_hi, x_lo - x0,
+                                    x0 + side - x_hi, cv2.BORDER_REPLICATE)
+        return window_with_context(inside, 0, 0, side)
+    left, top = int(x0 - pad >= 0), int(y0 - pad >= 0)
+    right, bottom = int(x0 + side + pad <= width), int(y0 + side + pad <= height)
+    crop = value[y0 - pad * top:y0 + side + pad * bottom, x0 - pad * left:x0 + side + pad * right]
+    small = cv2.resize(crop, (HOG_WINDOW + left + right, HOG_WINDOW + top + bottom), interpolation=cv2.INTER_AREA)
+    return cv2.copyMakeBorder(small, 1 - top, 1 - bottom, 1 - left, 1 - right, cv2.BORDER_REPLICATE)
