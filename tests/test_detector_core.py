@@ -129,3 +129,37 @@ def test_that_the_paper_step_and_odd_window_sizes_still_detect(model, scenes):
     settings = detector_core.DetectorSettings(step=detector_core.PAPER_STEP, window_sizes=(100, 130))
     detections = detector_core.TreeDetector(model, settings).detect(image)
     assert all(0 <= d.x <= 352 and 0 <= d.y <= 288 for d in detections)
+
+
+class _GridPlan(object):
+    """A score map's geometry for the peak tests: lattice positions 8 px apart, 96 px windows."""
+    window = 96
+
+    def window_origin(self, row, col):
+        return col * 8.0, row * 8.0
+
+
+def _score_map_with_peaks(peaks, shape=(12, 16), floor=-3.0):
+    scores = np.full(shape, floor, np.float32)
+    for (row, col), score in peaks.items():
+        scores[row, col] = score
+    return scores
+
+
+def test_that_a_weak_peak_on_the_score_map_border_is_dropped_but_a_strong_one_and_inner_ones_are_kept():
+    # Fixture: peaks at -0.5 on the border (a crown cut by the frame edge) and inside, 1.0 on the border.
+    scores = _score_map_with_peaks({(0, 5): -0.5, (6, 8): -0.5, (11, 2): 1.0, (4, 15): -0.2})
+    kept = detector_core._local_maxima(_GridPlan(), scores, -1.5, edge_threshold=0.0)
+    assert sorted(round(c[0], 2) for c in kept) == [-0.5, 1.0]
+    assert [(c[1], c[2]) for c in kept if c[0] < 0] == [(8 * 8 + 48, 6 * 8 + 48)]  # the inner peak
+    # without the edge rule every peak above the SVM threshold is a candidate
+    assert len(detector_core._local_maxima(_GridPlan(), scores, -1.5, edge_threshold=None)) == 4
+
+
+def test_that_a_window_centred_inside_an_accepted_crown_is_the_same_tree_but_a_neighbour_is_not():
+    accepted = [detector_core.Detection(150.0, 100.0, 129.0, 129.0, 1.2)]  # from a 168 px window (x 1.3)
+    side_window = (-0.7, 150.0, 145.0, 96.0)  # 45 px off the crown centre
+    neighbour = (-0.7, 150.0 + 129.0, 100.0, 168.0)  # one crown diameter away
+    assert detector_core._iou(side_window, (1.2, 150.0, 100.0, 168.0)) < detector_core.DEFAULT_NMS_OVERLAP
+    assert detector_core._inside_a_crown(side_window, accepted)
+    assert not detector_core._inside_a_crown(neighbour, accepted)

@@ -66,10 +66,39 @@ def test_that_hs_similarity_is_one_for_the_template_itself_and_lower_for_another
     rng = np.random.RandomState(3)
     green = np.clip(rng.normal((40, 160, 60), 15, (50, 50, 3)), 0, 255).astype(np.uint8)
     grey = np.clip(rng.normal((140, 140, 145), 15, (50, 50, 3)), 0, 255).astype(np.uint8)
-    hue, sat = features.hs_histograms(features.bgr_to_hsv(green))
+    hue, sat = features.hs_histograms(features.colour_region(features.bgr_to_hsv(green)))
     assert hue.shape == sat.shape == (256,)
     assert features.hs_similarity(features.bgr_to_hsv(green), hue, sat) == pytest.approx(1.0)
     assert features.hs_similarity(features.bgr_to_hsv(grey), hue, sat) < 0.5
+
+
+def test_that_the_colour_test_sees_the_crown_in_the_window_centre_not_the_ground_around_it():
+    # Fixture: a green crown (central 0.6 of the window) on grey ground, as a 1.3 x crown window frames it.
+    rng = np.random.RandomState(5)
+    green = (40, 160, 60)
+    window = np.clip(rng.normal((140, 140, 145), 15, (100, 100, 3)), 0, 255).astype(np.uint8)
+    window[20:80, 20:80] = np.clip(rng.normal(green, 15, (60, 60, 3)), 0, 255).astype(np.uint8)
+    crown_only = np.clip(rng.normal(green, 15, (60, 60, 3)), 0, 255).astype(np.uint8)
+    hue, sat = features.hs_histograms(features.bgr_to_hsv(crown_only))
+    assert features.colour_region(window).shape[:2] == (60, 60)
+    assert features.hs_similarity(features.bgr_to_hsv(window), hue, sat) > 0.95
+    # the same crown shifted to a corner of the window: the centre now shows ground
+    shifted = np.roll(window, (40, 40), axis=(0, 1))
+    assert features.hs_similarity(features.bgr_to_hsv(shifted), hue, sat) < 0.5
+
+
+def test_that_the_bottom_layer_texture_cue_ignores_light_and_gain_but_not_blur():
+    rng = np.random.RandomState(6)
+    fine = np.full((96, 96), 60, np.uint8)
+    for _ in range(80):  # thin needle-like strokes
+        x, y = rng.randint(0, 96, 2)
+        cv2.line(fine, (int(x), int(y)), (int(x) + 12, int(y) + 3), 200, 1)
+    dim = cv2.convertScaleAbs(fine, alpha=0.5)  # half the light: Var_hog drops 4 x
+    assert features.hog_global_variance(dim) < 0.3 * features.hog_global_variance(fine)
+    assert features.hog_texture(dim) == pytest.approx(features.hog_texture(fine), rel=0.2)  # the contrast floor
+    blurred = cv2.GaussianBlur(fine, (0, 0), 2.0)  # coarse texture, same light
+    assert features.hog_texture(blurred) < 0.5 * features.hog_texture(fine)
+    assert features.hog_texture(np.full((60, 60), 120, np.uint8)) == 0.0
 
 
 def test_that_pearson_of_constant_histograms_is_zero_not_nan():

@@ -15,7 +15,7 @@ def make_model(**overrides):
     fields = dict(species="oil_palm", svm_weights=rng.randn(features.hog_descriptor_length()), svm_bias=-0.5,
                   svm_threshold=0.1, variance_threshold=0.002, hs_threshold=0.6, template_hue=rng.rand(256),
                   template_sat=rng.rand(256), window_sizes=(96, 120), window_margin=1.3, reference_width=352,
-                  seed=7, notes="test model")
+                  seed=7, notes="test model", edge_threshold=-0.5)
     fields.update(overrides)
     return foranav_model.TreeModel(**fields)
 
@@ -37,7 +37,8 @@ def test_that_a_model_round_trips_through_its_file_without_pickle():
     assert np.array_equal(loaded.svm_weights, model.svm_weights)
     assert np.array_equal(loaded.template_hue, model.template_hue)
     assert loaded.window_sizes == (96, 120)
-    for name in ("svm_bias", "svm_threshold", "variance_threshold", "hs_threshold", "window_margin"):
+    for name in ("svm_bias", "svm_threshold", "variance_threshold", "hs_threshold", "edge_threshold",
+                 "window_margin"):
         assert getattr(loaded, name) == pytest.approx(getattr(model, name), rel=1e-6)
 
 

@@ -3,7 +3,8 @@ import numpy as np
 import pytest
 
 import host_tools.detection  # noqa: F401
-from host_tools.detection import svm, synthetic, training
+from host_tools.detection import evaluation, svm, synthetic, training
+import foranav_detector as detector_core
 
 
 def test_that_the_svm_separates_linearly_separable_data_with_a_margin():
@@ -46,3 +47,17 @@ def test_that_training_needs_trees_of_the_species():
     frames = synthetic.annotated_frames(range(10))
     with pytest.raises(ValueError, match="no complete 'citrus'"):
         training.train(frames, "citrus", seed=0)
+
+
+def test_that_the_edge_test_is_calibrated_to_the_best_frame_f1_of_its_candidates():
+    model = synthetic.small_model(seed=1, frames=40)
+    frames = synthetic.annotated_frames(range(100, 112))
+    messages = []
+    training._calibrate_edge(model, frames, messages.append)
+    candidates = (model.svm_threshold,) + training.EDGE_THRESHOLDS
+    assert model.edge_threshold in candidates and "edge test on 12 frames" in messages[0]
+
+    def f1(edge):
+        return evaluation.evaluate_frames(model, frames, detector_core.DetectorSettings(edge_threshold=edge))["f1"]
+    chosen = f1(model.edge_threshold)
+    assert all(chosen >= f1(edge) - 1e-6 for edge in candidates)

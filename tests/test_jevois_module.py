@@ -62,7 +62,8 @@ def test_that_the_module_file_folder_and_class_share_one_name_and_document_their
 def test_that_the_constructor_is_cheap_and_init_creates_the_parameters():
     instance, jevois = load_module()
     names = set(libjevois.parameters(instance))
-    assert {"species", "svmthresh", "varthresh", "hsthresh", "windows", "step", "serstyle", "framemark"} <= names
+    assert {"species", "svmthresh", "varthresh", "hsthresh", "edgethresh", "windows", "step", "serstyle",
+            "framemark"} <= names
     assert instance.params["species"].get() == "oil_palm"
 
 
@@ -215,6 +216,21 @@ def test_that_thresholds_follow_the_species_model_unless_set_explicitly():
     assert runner.instance.currentDetector().threshold("svm_threshold") == pytest.approx(
         runner.instance.model.svm_threshold)
     assert runner.command("foranav species nosuch").startswith("ERR")
+
+
+def test_that_the_edge_test_follows_the_model_unless_set_or_switched_off():
+    runner = ModuleRunner()
+    image = synthetic.ground(np.random.RandomState(2), 288, 352)
+    runner.process_frame(image)
+    detector = runner.instance.currentDetector()
+    assert detector.threshold("edge_threshold") == pytest.approx(detector.model.edge_threshold)  # auto
+    assert runner.command("foranav edgethresh off") == ""
+    runner.process_frame(image)
+    assert runner.instance.currentDetector().threshold("edge_threshold") == float("-inf")
+    assert runner.command("foranav edgethresh 0.5") == ""
+    runner.process_frame(image)
+    assert runner.instance.currentDetector().threshold("edge_threshold") == 0.5
+    assert runner.command("foranav edgethresh maybe").startswith("ERR")
 
 
 def test_that_two_runners_in_one_process_keep_their_serial_streams_apart():

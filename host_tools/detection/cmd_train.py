@@ -50,7 +50,7 @@ def run(args):
     with fileio.atomic_path(args.out) as tmp:
         with open(str(tmp), "wb") as handle:
             foranav_model.save_model(model, handle)
-    print("wrote %s: %s, svm bias %.3f, thresholds svm %.2f var %.4g hs %.3f"
+    print("wrote %s: %s, svm bias %.3f, thresholds svm %.2f var %.4g hs %.3f edge %.2f"
           % (args.out, model.notes, model.svm_bias, model.svm_threshold, model.variance_threshold,
-             model.hs_threshold))
+             model.hs_threshold, model.edge_threshold))
     return 0

@@ -118,5 +118,5 @@ def window_cues(frame, cx, cy, side, model):
     """(hue/saturation similarity, bottom-layer HOG variance) of a window."""
     rows, cols = pixel_window(frame, cx, cy, side)
     similarity = features.hs_similarity(frame.hsv[rows, cols], model.template_hue, model.template_sat)
-    variance = features.hog_global_variance(frame.value[rows, cols])
+    variance = features.hog_texture(frame.value[rows, cols])
     return similarity, variance

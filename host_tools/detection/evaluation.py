@@ -40,7 +40,7 @@ def classify_window(model, value, hsv, settings=None, small=None):
     small = _downscale_crop(value) if small is None else small
     score = model.score(features.top_layer_hog(small))
     similarity = features.hs_similarity(hsv, model.template_hue, model.template_sat)
-    variance = features.hog_global_variance(value)
+    variance = features.hog_texture(value)
     is_tree = (score > threshold("svm_threshold") and similarity > threshold("hs_threshold")
                and variance > threshold("variance_threshold"))
     return is_tree, score, similarity, variance

@@ -40,6 +40,7 @@ CALIBRATION_CROPS = 200  # of each class
 MIN_RECALL = 0.97  # calibrated crop recall at least this (paper: 96.06 %)
 SVM_THRESHOLDS = (-1.5, -1.2, -1.0, -0.8, -0.6, -0.45, -0.3, -0.15, 0.0, 0.15, 0.3)
 CUE_QUANTILES = (0.0, 0.01, 0.02, 0.03, 0.05, 0.08, 0.12)
+EDGE_THRESHOLDS = (-1.0, -0.5, 0.0, 0.5)  # candidates for the frame-edge test, searched on whole frames
 
 
 def train(frames, species, seed=0, window_sizes=DEFAULT_WINDOW_SIZES, reference_width=DEFAULT_REFERENCE_WIDTH,
@@ -86,6 +87,10 @@ def train(frames, species, seed=0, window_sizes=DEFAULT_WINDOW_SIZES, reference_
             break
         negatives = np.vstack([negatives, hard])
     _calibrate(model, calibration or learning, rng, log)
+    if mining_windows is None:  # frames of one camera: the model's window sizes fit them
+        _calibrate_edge(model, calibration or learning, log)
+    else:  # per-image window sizes (real imagery): whole-frame detection is not the model's; keep the default
+        log("edge test: per-image window sizes, default threshold %.2f kept" % model.edge_threshold)
     model.notes = ("species %s; %d frames (%d calibration); %d positives, %d negatives; seed %d"
                    % (species, len(frames), len(calibration), len(positives), len(negatives), seed))
     model.validate()
@@ -125,6 +130,21 @@ def _calibrate(model, frames, rng, log):
     (_ok, accuracy, recall, _svm), model.svm_threshold, model.hs_threshold, model.variance_threshold = best
     log("calibration on %d crops: accuracy %.3f recall %.3f at svm %.2f, hs %.3f, var %.4g"
         % (len(crops), accuracy, recall, model.svm_threshold, model.hs_threshold, model.variance_threshold))
+
+
+def _calibrate_edge(model, frames, log):
+    """Choose the frame-edge test (detector_core.DetectorSettings.edge_threshold) on whole held-back frames:
+    the best detection F1, ties to the more permissive value. Crops cannot tell it: it is about where a
+    window sits in the frame. Off is a candidate too, stored as the calibrated SVM threshold (no effect)."""
+    best = None
+    for edge in (model.svm_threshold,) + EDGE_THRESHOLDS:
+        result = evaluation.evaluate_frames(model, frames, detector_core.DetectorSettings(edge_threshold=edge))
+        key = (round(result["f1"], 6), -edge)
+        if best is None or key > best[0]:
+            best = (key, edge, result)
+    _key, model.edge_threshold, result = best
+    log("edge test on %d frames: threshold %.2f, detection precision %.3f recall %.3f F1 %.3f"
+        % (len(frames), model.edge_threshold, result["precision"], result["recall"], result["f1"]))
 
 
 def _below_quantile(values, quantile):
@@ -216,12 +236,12 @@ def _windows(frames, margin, wanted):
 
 
 def _colour_template(frames, species, margin):
-    """Mean normalised hue and saturation histograms of the species' crown windows."""
+    """Mean normalised hue and saturation histograms of the colour regions of the species' crown windows."""
     hue_sum = np.zeros(features.HS_BINS)
     sat_sum = np.zeros(features.HS_BINS)
     count = 0
     for frame, rows, cols in _windows(frames, margin, lambda label: label == species):
-        hue, sat = features.hs_histograms(frame.hsv[rows, cols])
+        hue, sat = features.hs_histograms(features.colour_region(frame.hsv[rows, cols]))
         hue_sum += hue / hue.sum()
         sat_sum += sat / sat.sum()
         count += 1

@@ -64,10 +64,12 @@ class ForaNavTrees:
                       "module folder", "oil_palm")
         self.addParam(pc, "svmthresh", "str", "Top-layer SVM score a window must exceed, or auto (the species "
                       "model's)", "auto")
-        self.addParam(pc, "varthresh", "str", "Bottom-layer global HOG variance a tree must exceed ((grey "
-                      "levels/pixel)^2), or auto (the species model's)", "auto")
+        self.addParam(pc, "varthresh", "str", "Bottom-layer texture (contrast-normalised global HOG histogram, "
+                      "1/px^2) a tree must exceed, or auto (the species model's)", "auto")
         self.addParam(pc, "hsthresh", "str", "Mean hue/saturation Pearson correlation with the template a "
                       "tree must exceed, or auto (the species model's)", "auto")
+        self.addParam(pc, "edgethresh", "str", "SVM score a window touching the frame edge must also exceed "
+                      "(a crown cut by the edge), auto (the species model's) or off", "auto")
         self.addParam(pc, "windows", "str", "Window sides in pixels, comma-separated, or auto (the model's, "
                       "scaled to the frame width)", "auto")
         self.addParam(pc, "step", "int", "Window step in downscaled pixels: W*step/24 in the frame "
@@ -91,14 +93,14 @@ class ForaNavTrees:
         species = self.params["species"].get()
         key = (species, self.params["svmthresh"].get(), self.params["varthresh"].get(),
                self.params["hsthresh"].get(), self.params["windows"].get(), self.params["step"].get(),
-               self.params["maxtrees"].get())
+               self.params["maxtrees"].get(), self.params["edgethresh"].get())
         if self.loaded[1] != key:
             if self.loaded[0] != species:
                 self.model = self.loadModel(species)
             settings = foranav_detector.DetectorSettings(
                 svm_threshold=parseThreshold(key[1]), variance_threshold=parseThreshold(key[2]),
                 hs_threshold=parseThreshold(key[3]), window_sizes=parseWindows(key[4]), step=key[5],
-                max_detections=key[6])
+                max_detections=key[6], edge_threshold=parseEdgeThreshold(key[7]))
             self.detector = foranav_detector.TreeDetector(self.model, settings)
             self.loaded = (species, key)
         return self.detector
@@ -175,13 +177,22 @@ class ForaNavTrees:
         return ("foranav - list the tree detector settings\n"
                 "foranav <name> - show one setting\n"
                 "foranav <name> <value> - change a setting (species, svmthresh|varthresh|hsthresh <number>|auto, "
-                "windows <px,px>|auto, step, maxtrees, serstyle Terse|Normal, framemark Stop|None)")
+                "edgethresh <number>|auto|off, windows <px,px>|auto, step, maxtrees, serstyle Terse|Normal, "
+                "framemark Stop|None)")
 
 
 def parseThreshold(text):
     """'auto' -> None (the model's threshold); '0.5' -> 0.5."""
     text = text.strip()
     return None if text in ("", "auto") else float(text)
+
+
+def parseEdgeThreshold(text):
+    """'auto' -> None (the model's); 'off' -> no extra test at the frame edge; '0' -> 0.0."""
+    text = text.strip()
+    if text == "off":
+        return foranav_detector.EDGE_TEST_OFF
+    return parseThreshold(text)
 
 
 def parseWindows(text):
@@ -197,6 +208,8 @@ def checkSetting(name, value):
     try:
         if name in ("svmthresh", "varthresh", "hsthresh"):
             parseThreshold(value)
+        elif name == "edgethresh":
+            parseEdgeThreshold(value)
         elif name in ("step", "maxtrees"):
             number = int(value)
             if number < 1 or (name == "step" and number > 24):

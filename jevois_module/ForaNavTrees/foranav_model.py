@@ -6,7 +6,7 @@
 # (checked against foranav_features on load), the linear SVM, the three thresholds, the colour template,
 # the species and the window sizes.
 #
-# Keys (format version 1):
+# Keys (format version 2; version 1 held the raw Var_hog as variance_threshold):
 #   format_version   int      FORMAT_VERSION; a file of another version is refused with a clear message
 #   species          str      e.g. "oil_palm" (also the id of N2 serial lines)
 #   hog_config       int[7]   W_d, cell, block, block stride, bins, angle levels, block-norm eps (x1000)
@@ -14,8 +14,9 @@
 #   svm_weights      f32[324] top-layer descriptor weights
 #   svm_bias         f32
 #   svm_threshold    f32      a window is a candidate when its score exceeds this
-#   variance_threshold f32    bottom-layer Var_hog must exceed this ((grey levels/pixel)^2)
+#   variance_threshold f32    bottom-layer cue foranav_features.hog_texture must exceed this (1/px^2)
 #   hs_threshold     f32      mean hue/saturation Pearson correlation must exceed this
+#   edge_threshold   f32      SVM score a peak on a score map's border (window at the frame edge) must exceed
 #   template_hue     f32[256] hue histogram of the species (normalised to sum 1)
 #   template_sat     f32[256] saturation histogram of the species (normalised to sum 1)
 #   window_sizes     int[k]   sliding-window sides W in pixels of the training frames' resolution
@@ -27,12 +28,13 @@ import numpy as np
 
 import foranav_features as features
 
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
+DEFAULT_EDGE_THRESHOLD = 0.0  # the SVM's decision boundary (models built in code; training calibrates it)
 SVM_KINDS = ("linear",)
 _EPS_SCALE = 1000.0
 REQUIRED_KEYS = ("format_version", "species", "hog_config", "svm_kind", "svm_weights", "svm_bias",
-                 "svm_threshold", "variance_threshold", "hs_threshold", "template_hue", "template_sat",
-                 "window_sizes", "window_margin", "reference_width", "seed", "notes")
+                 "svm_threshold", "variance_threshold", "hs_threshold", "edge_threshold", "template_hue",
+                 "template_sat", "window_sizes", "window_margin", "reference_width", "seed", "notes")
 
 
 class ModelFormatError(ValueError):
@@ -49,13 +51,15 @@ class TreeModel(object):
     """A trained detector model (see the module comment for the meaning of each field)."""
 
     def __init__(self, species, svm_weights, svm_bias, svm_threshold, variance_threshold, hs_threshold,
-                 template_hue, template_sat, window_sizes, window_margin, reference_width, seed=0, notes=""):
+                 template_hue, template_sat, window_sizes, window_margin, reference_width, seed=0, notes="",
+                 edge_threshold=DEFAULT_EDGE_THRESHOLD):
         self.species = str(species)
         self.svm_weights = np.asarray(svm_weights, np.float32).ravel()
         self.svm_bias = float(svm_bias)
         self.svm_threshold = float(svm_threshold)
         self.variance_threshold = float(variance_threshold)
         self.hs_threshold = float(hs_threshold)
+        self.edge_threshold = float(edge_threshold)
         self.template_hue = np.asarray(template_hue, np.float32).ravel()
         self.template_sat = np.asarray(template_sat, np.float32).ravel()
         self.window_sizes = tuple(int(w) for w in np.asarray(window_sizes).ravel())
@@ -78,7 +82,7 @@ class TreeModel(object):
         if not self.species or len(self.species.split()) != 1:
             raise ModelFormatError("species must be one word")
         values = [self.svm_bias, self.svm_threshold, self.variance_threshold, self.hs_threshold,
-                  self.window_margin] + list(self.svm_weights)
+                  self.edge_threshold, self.window_margin] + list(self.svm_weights)
         if not np.all(np.isfinite(values)) or self.window_margin <= 0 or self.reference_width <= 0:
             raise ModelFormatError("model numbers must be finite, margin and reference width positive")
 
@@ -97,6 +101,7 @@ class TreeModel(object):
             "svm_threshold": np.array(self.svm_threshold, np.float32),
             "variance_threshold": np.array(self.variance_threshold, np.float32),
             "hs_threshold": np.array(self.hs_threshold, np.float32),
+            "edge_threshold": np.array(self.edge_threshold, np.float32),
             "template_hue": self.template_hue,
             "template_sat": self.template_sat,
             "window_sizes": np.array(self.window_sizes, np.int32),
@@ -143,6 +148,7 @@ def model_from_arrays(arrays, name="model"):
             species=str(arrays["species"]), svm_weights=arrays["svm_weights"],
             svm_bias=float(arrays["svm_bias"]), svm_threshold=float(arrays["svm_threshold"]),
             variance_threshold=float(arrays["variance_threshold"]), hs_threshold=float(arrays["hs_threshold"]),
+            edge_threshold=float(arrays["edge_threshold"]),
             template_hue=arrays["template_hue"], template_sat=arrays["template_sat"],
             window_sizes=arrays["window_sizes"], window_margin=float(arrays["window_margin"]),
             reference_width=int(arrays["reference_width"]), seed=int(arrays["seed"]), notes=str(arrays["notes"]))
