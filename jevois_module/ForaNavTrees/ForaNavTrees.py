@@ -20,8 +20,9 @@ TEXT_COLOUR = (255, 255, 255)
 # "ForaNav", section III-A): a linear SVM on the HOG of its value channel downscaled to 24x24 px finds the
 # star shape of the fronds; its hue and saturation histograms correlate with the species' template
 # (rejects roofs and road crossings); and the variance of the global orientation histogram of its
-# full-resolution HOG is high enough (needle-like leaflets; rejects other palm species). Overlapping
-# windows are merged and their centres averaged.
+# full-resolution HOG, divided by the window's contrast so dim and blurred crowns are judged alike, is high
+# enough (needle-like leaflets; rejects other palm species). Overlapping windows are merged and their
+# centres averaged.
 #
 # Serial messages, per frame, best tree first (standardized coordinates, integers):
 #   T2 x y                     (serstyle Terse, default) or
@@ -36,8 +37,8 @@ TEXT_COLOUR = (255, 255, 255)
 #
 # @author ForaNav project
 # @displayname ForaNav Trees
-# @videomapping NONE 0 0 0.0 YUYV 352 288 30.0 ForaNav ForaNavTrees
-# @videomapping YUYV 352 288 30.0 YUYV 352 288 30.0 ForaNav ForaNavTrees
+# @videomapping NONE 0 0 0.0 YUYV 352 288 15.0 ForaNav ForaNavTrees
+# @videomapping YUYV 352 288 15.0 YUYV 352 288 15.0 ForaNav ForaNavTrees
 # @email none
 # @mainurl none
 # @license MIT
