@@ -185,6 +185,7 @@ class NavigationApp(object):
         message = foranav_serial.parse_line(line)
         if isinstance(message, foranav_serial.FrameMark):
             self._marks_seen = True
+            self.core.on_frame_mark(self.cf.x_task_get_tick_count())
             self._end_frame()
         elif isinstance(message, foranav_serial.Target2D):
             if message.kind == "N2" and self.target_label is not None and message.label != self.target_label:
@@ -227,6 +228,8 @@ class NavigationApp(object):
     err_v = property(lambda self: self.core.pixel_error[1])
     link_dropped = property(lambda self: self.link.lines_dropped)
     link_opens = property(lambda self: self.link.opens)
+    link_lost = property(lambda self: int(self.core.link_lost))
+    link_losses = property(lambda self: self.core.counters.link_losses)
 
     @property
     def target_x(self):
@@ -278,6 +281,11 @@ PARAM_TABLE = param_group("app", [
               "target unseen this long during the approach: recovery"),
     param_add(PARAM_UINT32, "recoveryTimeout", "recovery_timeout_ms", "ms",
               "recovery gives up (tree abandoned) after this long"),
+    param_add(PARAM_UINT32, "targetTimeout", "target_timeout_ms", "ms",
+              "a target not reached this long after it was selected is abandoned"),
+    param_add(PARAM_UINT16, "linkHoldMs", "link_hold_ms", "ms",
+              "camera link silent this long in flight: hold position until frames come back"),
+    param_add(PARAM_UINT16, "linkLandMs", "link_land_ms", "ms", "camera link silent this long: land"),
     param_add(PARAM_FLOAT, "recoverySpeed", "recovery_speed", "m/s", "speed when re-approaching s_t"),
     param_add(PARAM_FLOAT, "returnTol", "return_tolerance_m", "m",
               "cross-track error that ends RETURN_TO_PATH"),
@@ -322,4 +330,6 @@ LOG_TABLE = log_group("app", [
     log_add(LOG_UINT16, "forgotten", "forgotten", "", "visited entries forgotten from a full list"),
     log_add(LOG_UINT32, "linkDropped", "link_dropped", "", "serial lines dropped for length"),
     log_add(LOG_UINT16, "linkOpens", "link_opens", "", "times the serial port was (re)opened"),
+    log_add(LOG_UINT8, "linkLost", "link_lost", "", "1 while holding position for a silent camera link"),
+    log_add(LOG_UINT16, "linkLosses", "link_losses", "", "times the camera link went silent in flight"),
 ])

@@ -227,8 +227,8 @@ def test_that_the_last_waypoint_leads_to_landing_and_null_setpoints():
 
 
 def test_that_a_tree_seen_earlier_but_out_of_view_is_approached_by_memory():
-    # Fixture: a tree stored (2 hits) long ago, not in view now
-    world = World([])
+    # Fixture: a tree stored (2 hits) long ago (the take-off took longer than the lost timeout), not in view now
+    world = World([], lost_timeout_ms=600)
     tree_id, _ = world.core.memory.add(0.9, 0.1, 0, 176, 144, (0, 0))
     world.core.memory.update(tree_id, 0.9, 0.1, 0, 176, 144)
     world.trees.append((0.9, 0.1))

@@ -23,17 +23,17 @@ def test_that_fly_json_prints_the_summary_and_writes_the_outputs(tmp_path, capsy
 
 def test_that_fly_defaults_to_a_runs_folder_and_prints_a_table(tmp_path, capsys, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    code = cli.main(["fly", "--map", "map2", "--hide-tree", "5", "--hide-s", "5"])
+    code = cli.main(["fly", "--map", "map2", "--camera", "oracle", "--hide-tree", "5", "--hide-s", "5"])
     out = capsys.readouterr().out
     assert code == 0
     assert "SUCCESS" in out and "recoveries 1" in out
     assert (tmp_path / "runs" / "fly-map2-seed0" / "flight.tlog").exists()
 
 
-def test_that_the_sim_camera_is_not_available_yet(capsys):
-    assert cli.main(["fly", "--map", "map1", "--camera", "sim"]) == 2
+def test_that_sim_only_options_with_the_oracle_fail_in_one_line(capsys):
+    assert cli.main(["fly", "--map", "map1", "--camera", "oracle", "--fps", "9"]) == 2
     err = capsys.readouterr().err
-    assert "not available yet" in err and len(err.strip().splitlines()) == 1
+    assert "--fps" in err and len(err.strip().splitlines()) == 1
 
 
 def test_that_bad_arguments_fail_in_one_line_and_write_nothing(tmp_path, capsys):

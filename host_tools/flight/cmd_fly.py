@@ -1,15 +1,23 @@
 """Fly a map with the Crazyflie navigation app on the emulated firmware.
 
 The app (crazyflie_app/navigation.py) runs on the firmware emulation; a camera on the other end of a real
-pseudo-terminal sends it JeVois serial lines. --camera oracle is an ideal detector reading the map's ground
-truth (pixel noise, dropout and latency configurable); --camera sim (the rendered simulator with the JeVois
-module in the loop) comes with the vision half.
+pseudo-terminal sends it JeVois serial lines. --camera sim (the default) renders each frame from the MAV's
+true pose with the plantation simulator and runs the unchanged JeVois module on it (~9 FPS with one frame
+of latency, as in the paper; --fps and --latency-ms change that); --camera oracle is an ideal detector
+reading the map's ground truth (pixel noise, dropout and latency configurable).
+
+Lockstep (default): one simulated clock, deterministic (same map and seed = same summary and tlog bytes).
+--realtime: the camera and the flight run as two processes sharing nothing but the pty, on the wall clock
+times --speed; --kill-camera-at S kills the camera process at S simulated seconds (the app holds, then lands).
 
 Prints the flight summary (a short table, or the JSON object with --json) and writes flight.tlog (MAVLink 2),
 trajectory.png and summary.json into --out (default runs/fly-<map>-seed<N>/). Exit status 0 when the flight
 completed, 1 when it did not (crash, watchdog lock, time limit), 2 on bad input.
 
 Examples:
+  foranav fly --map map1
+  foranav fly --map map1 --realtime --speed 4
+  foranav fly --map map1 --silence 40:2 --garbage-rate 0.2
   foranav fly --map map1 --camera oracle
   foranav fly --map map2 --camera oracle --dropout 0.3 --json
   foranav fly --map map3 --camera oracle --hide-tree 6 --hide-s 5 --mavlink udpout:127.0.0.1:14550
@@ -27,8 +35,8 @@ PROGRESS_EVERY_S = 5.0  # wall-clock seconds between progress lines on stderr
 
 def add_arguments(parser):
     parser.add_argument("--map", required=True, help="built-in map name (map1, map2, map3) or map file")
-    parser.add_argument("--camera", choices=CAMERA_CHOICES, default="oracle",
-                        help="oracle: ground-truth detector; sim: rendered frames + JeVois module (issue #5)")
+    parser.add_argument("--camera", choices=CAMERA_CHOICES, default="sim",
+                        help="sim (default): rendered frames + the JeVois module; oracle: ground-truth detector")
     parser.add_argument("--seed", type=int, default=0, help="seed of every random choice (default 0)")
     parser.add_argument("--out", help="output folder (default runs/fly-<map>-seed<N>/)")
     parser.add_argument("--json", action="store_true", help="print the summary as one JSON object")
@@ -38,7 +46,20 @@ def add_arguments(parser):
     parser.add_argument("--hide-s", type=float, default=5.0,
                         help="... for this many seconds from when the app first approaches it (default 5)")
     parser.add_argument("--pixel-noise", type=float, default=None, help="oracle: pixel noise std (px)")
-    parser.add_argument("--latency-ms", type=int, default=None, help="oracle: frame latency (ms)")
+    parser.add_argument("--latency-ms", type=int, default=None,
+                        help="camera latency (ms; default sim: one frame, oracle: 50)")
+    parser.add_argument("--fps", type=float, default=None, help="sim: camera frame rate (default 9, the paper)")
+    parser.add_argument("--silence", action="append", default=[], metavar="START:DURATION",
+                        help="fault: nothing reaches the wire from START for DURATION seconds (repeatable)")
+    parser.add_argument("--garbage-rate", type=float, default=0.0,
+                        help="fault: probability per frame of a garbage line on the wire")
+    parser.add_argument("--partial-rate", type=float, default=0.0,
+                        help="fault: probability per frame that its bytes arrive in two pieces")
+    parser.add_argument("--realtime", action="store_true",
+                        help="camera and flight as two processes sharing only the pty, on the wall clock")
+    parser.add_argument("--speed", type=float, default=1.0, help="--realtime: wall-clock speed-up (default 1)")
+    parser.add_argument("--kill-camera-at", type=float, default=None, metavar="S",
+                        help="--realtime fault: kill the camera process at S simulated seconds")
     parser.add_argument("--cam-offset", type=float, nargs=2, metavar=("FWD", "LEFT"), default=None,
                         help="camera mount offset from the MAV centre, body frame (m); sets the oracle's mount "
                              "and the app's app.camOffsetX/Y")
@@ -55,7 +76,12 @@ def _options(args):
         raise ForaNavError("--hide-s: must not be negative")
     if args.wind < 0:
         raise ForaNavError("--wind: must not be negative")
-    options = {"dropout": args.dropout, "model": {"estimator": args.estimator, "wind_gust_mps2": args.wind}}
+    for name in ("garbage_rate", "partial_rate"):
+        if not 0.0 <= getattr(args, name) <= 1.0:
+            raise ForaNavError("--%s: must be in [0, 1], got %r" % (name.replace("_", "-"), getattr(args, name)))
+    options = {"dropout": args.dropout, "model": {"estimator": args.estimator, "wind_gust_mps2": args.wind},
+               "silence": [_window(text) for text in args.silence], "garbage_rate": args.garbage_rate,
+               "partial_rate": args.partial_rate}
     if args.hide_tree is not None:
         options.update(hide_tree=args.hide_tree, hide_s=args.hide_s)
     if args.mavlink:
@@ -65,9 +91,25 @@ def _options(args):
     return options
 
 
+def _window(text):
+    try:
+        start, duration = (float(part) for part in text.split(":"))
+    except ValueError:
+        raise ForaNavError("--silence: expected START:DURATION in seconds, got %r" % text)
+    if start < 0 or duration <= 0:
+        raise ForaNavError("--silence: START must be >= 0 and DURATION > 0, got %r" % text)
+    return (start, duration)
+
+
 def _camera_kwargs(args):
     kwargs = {}
+    if args.fps is not None:
+        if args.camera != "sim" or not args.fps > 0:
+            raise ForaNavError("--fps: a positive frame rate, with --camera sim")
+        kwargs["frame_period_ms"] = int(round(1000.0 / args.fps))
     if args.pixel_noise is not None:
+        if args.camera != "oracle":
+            raise ForaNavError("--pixel-noise: only with --camera oracle (the sim camera has sensor noise)")
         if args.pixel_noise < 0:
             raise ForaNavError("--pixel-noise: must not be negative")
         kwargs["pixel_noise_px"] = args.pixel_noise
@@ -97,6 +139,15 @@ def print_table(summary, out=None):
     print("  mean deviation %s m (95%% CI +/- %s); mission %.1f s; recoveries %d; watchdog events %d" % (
         "-" if mean is None else "%.3f" % mean, "-" if ci is None else "%.3f" % ci, summary["mission_time_s"],
         summary["recoveries"], summary["watchdog_events"]), file=out)
+    vision = summary.get("vision")
+    if vision:
+        fps = vision.get("effective_fps", vision["fps"])  # realtime: the frames that actually arrived
+        print("  camera %.1f fps: %s detections per frame; %d true, %d false, %d missed (recall %s, precision %s)"
+              % (fps, vision["detections_per_frame"], vision["true_positives"], vision["false_positives"],
+                 vision["missed"], vision["recall"], vision["precision"]), file=out)
+    if summary.get("link_losses") or summary.get("link_aborted"):
+        print("  camera link lost %d time(s)%s" % (summary["link_losses"], "; LANDED: link dead"
+                                                    if summary["link_aborted"] else ""), file=out)
     if summary.get("tlog"):
         print("  tlog %s\n  plot %s" % (summary["tlog"], summary["plot"]), file=out)
 
@@ -105,14 +156,22 @@ def run(args):
     from host_tools.flight import camera_factory, run_flight
     from host_tools.maps import load_map
 
-    factory = camera_factory(args.camera)  # 'sim' fails here until the vision half registers it
+    factory = camera_factory(args.camera)
     options = _options(args)
+    if args.kill_camera_at is not None and not args.realtime:
+        raise ForaNavError("--kill-camera-at: only with --realtime (the camera is a process there)")
+    if args.realtime and args.camera != "sim":
+        raise ForaNavError("--realtime: only with --camera sim")
     pmap = load_map(args.map)
     out = Path(args.out) if args.out else Path("runs") / ("fly-%s-seed%d" % (Path(args.map).stem, args.seed))
-    try:
-        camera = factory(pmap, seed=args.seed, **_camera_kwargs(args))
-    except ValueError as err:
-        raise ForaNavError("camera: %s" % err)
+    kwargs = _camera_kwargs(args)
+    if args.realtime:
+        camera = None
+    else:
+        try:
+            camera = factory(pmap, seed=args.seed, **kwargs)
+        except ValueError as err:
+            raise ForaNavError("camera: %s" % err)
 
     last_print = [time.monotonic()]
 
@@ -122,7 +181,12 @@ def run(args):
             last_print[0] = time.monotonic()
             print("  t = %5.0f s  %s" % (t_s, phase), file=sys.stderr)
 
-    summary = run_flight(pmap, camera, seed=args.seed, out_dir=out, options=options, progress=progress)
+    if args.realtime:
+        from host_tools.flight.realtime import run_realtime
+        summary = run_realtime(pmap, seed=args.seed, speed=args.speed, out_dir=out, options=options,
+                               kill_camera_at_s=args.kill_camera_at, camera_kwargs=kwargs, progress=progress)
+    else:
+        summary = run_flight(pmap, camera, seed=args.seed, out_dir=out, options=options, progress=progress)
     cpu = summary.pop("cpu_s", None)
     if args.json:
         print(json.dumps(summary, indent=2))

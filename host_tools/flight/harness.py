@@ -32,7 +32,7 @@ before the clock moves on, so the same map and seed give the same summary and th
     mavlink        live MAVLink output URL (e.g. 'udpout:127.0.0.1:14550'); needs out_dir (it tees the tlog)
     decks          decks present (default ('bcFlow2', 'bcLoco'))
 
-``progress(t_s, phase_name)`` is called about every 10 simulated seconds.
+``progress(t_s, phase_name)`` is called every simulated second.
 """
 import heapq
 import importlib
@@ -62,7 +62,7 @@ MONITOR_PERIOD_MS = 10
 TELEMETRY_PERIOD_MS = 100
 HEARTBEAT_PERIOD_MS = 1000
 TRAJECTORY_PERIOD_MS = 50
-PROGRESS_PERIOD_MS = 10000
+PROGRESS_PERIOD_MS = 1000  # progress callbacks (the demo's bar); cmd_fly prints at most every 5 s of wall clock
 AFTER_LANDING_MS = 500  # keep running this long after the app is done
 PARTIAL_SPLIT_DELAY_MS = 3
 REACHED_MATCH_RADIUS_M = 0.3  # a reached point farther than this from every tree reached nothing
@@ -339,7 +339,9 @@ class _Flight(object):
         deviations = [r["deviation_m"] for r in self.reached if r["id"] in target_set]
         mean, ci95 = mean_ci95(deviations)
         watchdog = [{"t_s": t / 1000.0, "state": s} for t, s in self.cf.supervisor.watchdog_events]
-        completed = self.app.phase == PHASE_DONE and self.cf.supervisor.state != LOCKED
+        # a landing forced by a dead camera link is safe, but the mission was not completed
+        completed = (self.app.phase == PHASE_DONE and self.cf.supervisor.state != LOCKED
+                     and not self.app.core.link_aborted)
         counts = {i: visits.count(i) for i in targets}
         success = (completed and all(c == 1 for c in counts.values()) and not non_targets
                    and None not in visits and not watchdog)
@@ -367,6 +369,8 @@ class _Flight(object):
             "detections": counters.detections,
             "out_of_column_detections": counters.out_of_column,
             "serial_lines_dropped": self.app.link.lines_dropped,
+            "link_losses": counters.link_losses,
+            "link_aborted": self.app.core.link_aborted,
             "hidden_tree": self.options["hide_tree"],
             "hidden_from_s": None if self.hide_started_ms is None else self.hide_started_ms / 1000.0,
         }
@@ -386,6 +390,8 @@ def run_flight(pmap, camera, *, seed=0, out_dir=None, options=None, progress=Non
         raise
     flight.close(keep=True)
     summary = flight.summary()
+    if hasattr(camera, "report"):  # a camera that scores its own detections (vision_camera): per-frame figures
+        summary["vision"] = camera.report()
     summary["cpu_s"] = round(flight.cpu_s, 2)  # not part of the reproducible record
     if flight.out_dir is not None:
         from host_tools.flight.plot import plot_trajectory
@@ -393,6 +399,9 @@ def run_flight(pmap, camera, *, seed=0, out_dir=None, options=None, progress=Non
         summary["plot"] = str(flight.out_dir / "trajectory.png")
         summary["summary"] = str(flight.out_dir / "summary.json")
         plot_trajectory(flight, summary["plot"])
+        if hasattr(camera, "frames_csv"):
+            summary["detections_csv"] = str(flight.out_dir / "detections.csv")
+            fileio.write_text(summary["detections_csv"], camera.frames_csv())
         record = {k: v for k, v in summary.items() if k != "cpu_s"}
         fileio.write_json(summary["summary"], record)
     return summary

@@ -39,6 +39,12 @@ def plot_trajectory(flight, path):
     if flight.app_trees:
         _, ax_, ay_ = zip(*flight.app_trees)
         ax.plot(ax_, ay_, "x", color=COLOURS["app_tree"], markersize=5, label="trees stored by the app")
+    killed_ms = getattr(flight, "camera_killed_ms", None)  # --realtime --kill-camera-at
+    if killed_ms is not None and flight.trajectory:
+        at = min(flight.trajectory, key=lambda row: abs(row[0] - killed_ms))
+        ax.plot([at[1]], [at[2]], "*", color=COLOURS["recovery"], markersize=12, label="camera died")
+        end = flight.trajectory[-1]
+        ax.plot([end[1]], [end[2]], "v", color="black", markersize=7, label="landed")
     if flight.reached:
         px, py = zip(*(r["point"] for r in flight.reached))
         ax.plot(px, py, "+", color="black", markersize=9, label="declared reached")

@@ -107,12 +107,17 @@ def truth_in_frame(trees, species):
     return [(t.u, t.v, t.w) for t in trees if t.complete and t.species == species]
 
 
+class _NullLog(object):
+    def write(self, text):
+        pass
+
+
 class VisionCamera(object):
     """Rendered frames from the true pose -> the JeVois module -> serial lines (see the module docstring)."""
 
     def __init__(self, pmap, *, seed=0, frame_period_ms=DEFAULT_FRAME_PERIOD_MS, latency_ms=None,
                  effects=DEFAULT_EFFECTS, width=352, height=288, mount_offset=(0.0, 0.0), module_params=None,
-                 world=None, serial_stream=None):
+                 world=None, serial_stream=None, log_stream=None):
         if frame_period_ms <= 0:
             raise ValueError("frame_period_ms must be > 0, got %r" % frame_period_ms)
         if latency_ms is not None and latency_ms < 0:
@@ -131,7 +136,8 @@ class VisionCamera(object):
         self._rng = np.random.default_rng([int(seed) & 0xFFFFFFFF, 0xCA3])  # sensor noise, per flight seed
         params = {"species": pmap.target_species}
         params.update(module_params or {})
-        self.runner = ModuleRunner(serial_stream=serial_stream, params=params)
+        # the module's periodic timing log ("INF ForaNavTrees average ...") would interleave with the CLI output
+        self.runner = ModuleRunner(serial_stream=serial_stream, params=params, log_stream=log_stream or _NullLog())
         self.score = DetectionScore()
         self.last_frame = None
 
@@ -177,6 +183,12 @@ class VisionCamera(object):
                        truth_in_frame(frame.trees, self.pmap.target_species))
         return lines
 
+    def frames_csv(self):
+        """One row per frame: capture time, detections sent, trees that should be found, true/false positives."""
+        rows = ["t_ms,detections,truth,true_positives,false_positives"]
+        rows.extend("%d,%d,%d,%d,%d" % row for row in self.score.per_frame)
+        return "\n".join(rows) + "\n"
+
     def report(self):
         """Detection totals of the flight so far (for the summary's "vision" entry)."""
         report = self.score.report()
@@ -185,13 +197,11 @@ class VisionCamera(object):
 
 
 def fly_with_vision(pmap, *, seed=0, out_dir=None, options=None, progress=None, **camera_kwargs):
-    """run_flight with a VisionCamera; the summary gains "vision" (the camera's detection report)."""
+    """run_flight with a VisionCamera; the summary has "vision" (the camera's detection report)."""
     from host_tools.flight.harness import run_flight
 
     camera = VisionCamera(pmap, seed=seed, **camera_kwargs)
-    summary = run_flight(pmap, camera, seed=seed, out_dir=out_dir, options=options, progress=progress)
-    summary["vision"] = camera.report()
-    return summary
+    return run_flight(pmap, camera, seed=seed, out_dir=out_dir, options=options, progress=progress)
 
 
 def _sim(pmap, seed=0, **kwargs):

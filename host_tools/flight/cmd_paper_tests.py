@@ -1,0 +1,68 @@
+"""Fly the paper's Tests 1-9 (three per map) closed-loop: rendered frames, the JeVois module and the
+Crazyflie app talking over a real pty. Prints the table (targets reached, non-targets visited, mean deviation
+and 95 % CI, mission time, recoveries, detections per frame) and writes results.json, table.md, the Fig. 8
+deviation plot (deviation.png), one plot per map with its tests' trajectories (map1_tests.png, like the
+paper's Figs. 6-7) and each test's tlog, trajectory plot and summary into --out.
+
+Exit status 0 when all tests pass the paper's criteria (every target reached exactly once, no non-target
+visited, mean deviation <= 0.10 m), 1 otherwise.
+
+Examples:
+  foranav paper-tests
+  foranav paper-tests --out runs/paper --json
+  foranav paper-tests --tests 3,6 --jobs 1
+"""
+import json
+import sys
+import time
+from pathlib import Path
+
+from host_tools.errors import ForaNavError
+
+
+def add_arguments(parser):
+    parser.add_argument("--out", default="runs/paper-tests", help="output folder (default runs/paper-tests/)")
+    parser.add_argument("--json", action="store_true", help='print {"tests": [...]} (each the fly summary plus '
+                        '"test" and "map") instead of the table')
+    parser.add_argument("--tests", help="comma-separated test numbers to run (default: 1-9)")
+    parser.add_argument("--jobs", type=int, default=None, help="flights in parallel (default: one per CPU)")
+
+
+def _selected(text):
+    from host_tools.flight.paper_tests import PAPER_TESTS
+
+    if not text:
+        return PAPER_TESTS
+    try:
+        wanted = {int(part) for part in text.split(",") if part.strip()}
+    except ValueError:
+        raise ForaNavError("--tests: expected numbers like 1,3,8, got %r" % text)
+    unknown = wanted - {t.number for t in PAPER_TESTS}
+    if unknown or not wanted:
+        raise ForaNavError("--tests: no such test %s (have 1-9)" % sorted(unknown))
+    return tuple(t for t in PAPER_TESTS if t.number in wanted)
+
+
+def run(args):
+    from host_tools.flight import paper_tests
+
+    tests = _selected(args.tests)
+    if args.jobs is not None and args.jobs < 1:
+        raise ForaNavError("--jobs: must be at least 1")
+    started = time.monotonic()
+
+    def on_result(entry):
+        if not args.json:
+            print("  Test %d (%s): %s in %.0f s" % (entry["test"], entry["map"], "pass" if entry["passed"]
+                                                   else "FAIL", entry["wall_s"]), file=sys.stderr)
+
+    results = paper_tests.run_tests(tests, out_dir=args.out, jobs=args.jobs, on_result=on_result)
+    wall = round(time.monotonic() - started, 1)
+    paths = paper_tests.write_outputs(results, Path(args.out), wall_s=wall)
+    if args.json:
+        print(json.dumps({"tests": results}, indent=2))
+    else:
+        print("\n".join(paper_tests.table(results)))
+        print("%d/%d tests pass; %.0f s wall; table %s; Fig. 8 plot %s" % (
+            sum(e["passed"] for e in results), len(results), wall, paths["table"], paths["plot"]))
+    return 0 if all(e["passed"] for e in results) else 1

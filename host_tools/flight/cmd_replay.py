@@ -1,0 +1,68 @@
+"""Replay a recorded clip (video + pose sidecar) through both halves, open loop.
+
+The clip's frames go through the unchanged JeVois module and over a real pseudo-terminal into the Crazyflie
+app, whose state estimate follows the recorded poses (whatever it commands). Reports the detections per frame
+against the sidecar's ground truth, the tree map the app built (world positions against the map) and the
+setpoints the app would have sent. The sidecar format (also for real footage with a pose log) is documented in
+host_tools/sim/clip.py and docs/readme/simulator.md.
+
+Examples:
+  foranav replay tests/fixtures/clips/map1_full
+  foranav replay my_clip/ --map map2 --json
+"""
+import json
+import sys
+
+from host_tools.errors import ForaNavError
+
+
+def add_arguments(parser):
+    parser.add_argument("clip", help="clip folder (clip.avi + clip.json) or its clip.json")
+    parser.add_argument("--map", help="map giving the path F, when the sidecar has none (or to override it)")
+    parser.add_argument("--latency-ms", type=int, default=None,
+                        help="delay of the module's lines on the wire (default: one clip frame)")
+    parser.add_argument("--json", action="store_true", help="print the full report (with per-frame rows and "
+                        "setpoints) as one JSON object")
+
+
+def print_report(report, out=None):
+    out = out or sys.stdout
+    det = report["detection"]
+    print("replay %s: %d frames, %.1f s, latency %d ms" % (report["clip"], report["frames"], report["duration_s"],
+                                                         report["latency_ms"]), file=out)
+    if det:
+        print("  detections: %.2f per frame; %d true, %d false, %d missed (recall %s, precision %s); mean pixel "
+              "error %s px" % (det["detections_per_frame"] or 0.0, det["true_positives"], det["false_positives"],
+                               det["missed"], det["recall"], det["precision"], det["mean_pixel_error"]), file=out)
+    else:
+        print("  detections: no ground truth in the sidecar", file=out)
+    print("  tree map (app) vs truth:", file=out)
+    print("    %-6s %-16s %-8s %s" % ("app", "position (m)", "map id", "error (m)"), file=out)
+    for t in report["tree_map"]:
+        print("    %-6d (%6.3f, %6.3f)  %-8s %s" % (t["app_id"], t["x"], t["y"], t["map_id"] or "-",
+                                                  "-" if t["error_m"] is None else "%.3f" % t["error_m"]), file=out)
+    print("  mean map error %s m, max %s m; trees seen whole but not mapped: %s; spurious app trees: %d" % (
+        report["tree_map_mean_error_m"], report["tree_map_max_error_m"], report["trees_seen_not_mapped"] or "none",
+        report["spurious_app_trees"]), file=out)
+    sp = report["setpoints"]
+    print("  setpoints: %d sampled; time per phase %s" % (len(sp), report["phases"]), file=out)
+    for row in sp[:: max(1, len(sp) // 8)]:
+        print("    t %5.1f s  %-14s v (%.2f, %.2f) m/s  z %.2f m" % (row["t_s"], row["phase"], row["vx"], row["vy"],
+                                                                 row["z"]), file=out)
+
+
+def run(args):
+    from host_tools.flight.replay import replay_clip
+    from host_tools.maps import load_map
+    from host_tools.sim.clip import read_clip
+
+    clip = read_clip(args.clip)
+    pmap = load_map(args.map) if args.map else None
+    if args.latency_ms is not None and args.latency_ms < 0:
+        raise ForaNavError("--latency-ms: must not be negative")
+    report = replay_clip(clip, pmap, latency_ms=args.latency_ms)
+    if args.json:
+        print(json.dumps(report, indent=2))
+    else:
+        print_report(report)
+    return 0
