@@ -5,15 +5,8 @@ Stable interface for the flight commands::
     from host_tools.flight import run_flight, OracleCamera, register_camera, camera_factory
     summary = run_flight(pmap, OracleCamera(pmap, seed=0), seed=0, out_dir="runs/x", options={"dropout": 0.3})
 """
-import os
-
-# The camera half's detector does many small matrix products; OpenBLAS threads only fight over the cores
-# (a --camera sim flight runs ~3x faster single-threaded on a 2-core host). This must run before numpy is
-# loaded, which for the foranav flight commands is here (the CLI imports a command's package first).
-os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-
-from host_tools.flight.harness import DEFAULT_OPTIONS, camera_factory, register_camera, run_flight  # noqa: F401,E402
-from host_tools.flight.oracle import OracleCamera  # noqa: F401,E402
+from host_tools.flight.harness import DEFAULT_OPTIONS, camera_factory, register_camera, run_flight  # noqa: F401
+from host_tools.flight.oracle import OracleCamera  # noqa: F401
 
 
 def _oracle(pmap, seed=0, **kwargs):

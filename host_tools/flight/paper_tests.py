@@ -88,10 +88,7 @@ def fly_test(test, out_dir=None, map_path=None):
 def run_tests(tests=PAPER_TESTS, out_dir=None, jobs=None, on_result=None):
     """Fly ``tests`` (in test order in the result); ``on_result(entry)`` is called as each one finishes."""
     jobs = max(1, min(len(tests), jobs or os.cpu_count() or 1))
-    # The detector's matrix products are small: BLAS threads only fight over the cores with the other
-    # flights. The workers are fresh interpreters (spawn), so they read this before loading numpy.
-    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-    os.environ.setdefault("OMP_NUM_THREADS", "1")
+    # The workers are fresh interpreters (spawn): importing host_tools limits their BLAS threads before numpy.
     by_number = {}
     context = multiprocessing.get_context("spawn")
     with concurrent.futures.ProcessPoolExecutor(max_workers=jobs, mp_context=context) as pool:
