@@ -152,7 +152,7 @@ def test_that_the_readme_section_lists_every_param_with_its_default():
 
     from crazyflie_app.navigation_core import NavigationParams
 
-    text = (Path(__file__).resolve().parents[1] / "docs" / "readme" / "flight_app.md").read_text()
+    text = (Path(__file__).resolve().parents[1] / "README.md").read_text()
     defaults = NavigationParams()
     for entry in PARAM_TABLE.entries:
         assert "| `app.%s` | %g |" % (entry.name, getattr(defaults, entry.attribute)) in text, entry.name

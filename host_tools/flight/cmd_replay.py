@@ -4,7 +4,7 @@ The clip's frames go through the unchanged JeVois module and over a real pseudo-
 app, whose state estimate follows the recorded poses (whatever it commands). Reports the detections per frame
 against the sidecar's ground truth, the tree map the app built (world positions against the map) and the
 setpoints the app would have sent. The sidecar format (also for real footage with a pose log) is documented in
-host_tools/sim/clip.py and docs/readme/simulator.md.
+host_tools/sim/clip.py and README.md (Clips).
 
 Examples:
   foranav replay tests/fixtures/clips/map1_full

@@ -2,7 +2,7 @@
 
 Example: foranav record --map map1 --out clips/map1 --speed 0.3 --fps 10
 The MAV holds yaw (default 0, as the paper's navigation app does) and altitude (default: the map's).
-The sidecar format is documented in host_tools/sim/clip.py and docs/readme/simulator.md.
+The sidecar format is documented in host_tools/sim/clip.py and README.md (Clips).
 """
 import math
 
