@@ -6,6 +6,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 from host_tools import fileio  # noqa: E402
+from host_tools.flight.plot import save_map_figure  # noqa: E402
 from host_tools.flight.stats import mean_ci95  # noqa: E402
 
 PAPER_BOUND_M = 0.10  # the paper: mean deviation below 0.1 m in every test
@@ -111,14 +112,5 @@ def plot_map_tests(pmap, entries, tracks, path):
     for kind, text in (("reached", "target, reached"), ("missed", "target, missed in a test"),
                        ("non_target", "non-target"), ("visited_non_target", "non-target, visited")):
         ax.plot([], [], "o", color=TREE_COLOURS[kind], alpha=0.5, label=text)
-    ax.set_aspect("equal")
-    ax.set_xlabel("x (m, forward)")
-    ax.set_ylabel("y (m, left)")
-    ax.set_title("%s: Tests %s" % (pmap.name.split(":")[0], ", ".join(str(e["test"]) for e in entries)),
-                 fontsize=10)
-    ax.grid(True, linewidth=0.3)
-    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7)
-    fig.tight_layout()
-    with fileio.atomic_path(path) as tmp:
-        fig.savefig(tmp)
-    plt.close(fig)
+    save_map_figure(fig, ax, "%s: Tests %s" % (pmap.name.split(":")[0], ", ".join(str(e["test"]) for e in entries)),
+                    path)

@@ -50,10 +50,15 @@ def plot_trajectory(flight, path):
         ax.plot(px, py, "+", color="black", markersize=9, label="declared reached")
     ax.plot([], [], "o", color=COLOURS["target"], alpha=0.4, label="target tree")
     ax.plot([], [], "o", color=COLOURS["non_target"], alpha=0.4, label="non-target tree")
+    save_map_figure(fig, ax, pmap.name.split(":")[0] + " - seed %d" % flight.seed, path)
+
+
+def save_map_figure(fig, ax, title, path):
+    """Finish a top-down map plot (metres, equal axes, legend outside) and write it atomically."""
     ax.set_aspect("equal")
     ax.set_xlabel("x (m, forward)")
     ax.set_ylabel("y (m, left)")
-    ax.set_title(pmap.name.split(":")[0] + " - seed %d" % flight.seed, fontsize=10)
+    ax.set_title(title, fontsize=10)
     ax.grid(True, linewidth=0.3)
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7)
     fig.tight_layout()
