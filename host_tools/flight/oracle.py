@@ -7,16 +7,14 @@ standardized coordinates (with Gaussian pixel noise and an independent dropout p
 ``MARK STOP``. It detects *species*, not the planting-column rule: an oil palm outside the column is reported
 too, and the app must ignore it. Camera model and frames as in docs/DESIGN.md.
 """
-import math
-
 import numpy as np
 
+from host_tools.sim.camera import CameraModel, Pose
 from jevois_module.ForaNavTrees import foranav_serial
 
 DEFAULT_FRAME_PERIOD_MS = 100  # ~10 fps (the paper's detector runs at 8.9 fps on the JeVois)
 DEFAULT_LATENCY_MS = 50
 DEFAULT_PIXEL_NOISE_PX = 1.5
-CAM_SCALE_352 = 0.0031  # m per px per m of height at 352 px width
 
 
 class OracleCamera(object):
@@ -31,28 +29,20 @@ class OracleCamera(object):
         self.latency_ms = int(latency_ms)
         self.pixel_noise_px = float(pixel_noise_px)
         self.dropout = float(dropout)
-        self.width, self.height = int(width), int(height)
-        self.focal_px = (1.0 / CAM_SCALE_352) * self.width / 352.0
-        self.mount_offset = tuple(mount_offset)
+        self.camera = CameraModel(width, height, mount_offset)
+        self.width, self.height = self.camera.width, self.camera.height
+        self.focal_px = self.camera.focal_px
+        self.mount_offset = self.camera.mount_offset
         self.frame_marks = frame_marks
         self.trees = [t for t in pmap.trees if t.species == pmap.target_species]
         self._rng = np.random.default_rng(seed)
 
     def ground_point(self, true_pose):
-        x, y, z, yaw_deg = true_pose
-        c, s = math.cos(math.radians(yaw_deg)), math.sin(math.radians(yaw_deg))
-        ox, oy = self.mount_offset
-        return x + ox * c - oy * s, y + ox * s + oy * c
+        return self.camera.ground_point(Pose(*true_pose))
 
     def project(self, tree_x, tree_y, true_pose):
         """Pixel (u, v) of a ground point seen from ``true_pose`` (x, y, z, yaw_deg)."""
-        x, y, z, yaw_deg = true_pose
-        gx, gy = self.ground_point(true_pose)
-        c, s = math.cos(math.radians(yaw_deg)), math.sin(math.radians(yaw_deg))
-        dx, dy = tree_x - gx, tree_y - gy
-        fwd, left = dx * c + dy * s, -dx * s + dy * c
-        k = self.focal_px / z
-        return self.width / 2.0 - left * k, self.height / 2.0 - fwd * k
+        return self.camera.world_to_pixel(Pose(*true_pose), tree_x, tree_y)
 
     def visible(self, true_pose, hidden=frozenset()):
         """(tree, u, v) for each target-species tree whose whole crown is in the frame."""
