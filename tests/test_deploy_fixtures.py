@@ -37,7 +37,10 @@ USER_INITSCRIPT = textwrap.dedent("""\
 
 MODULE_SOURCE = textwrap.dedent('''\
     """Fake ForaNavTrees for deploy tests."""
+    import os
+
     import libjevois as jevois
+    import numpy as np
     import foranav_helper
 
     MODEL = "foranav_oil_palm.npz"
@@ -53,6 +56,11 @@ MODULE_SOURCE = textwrap.dedent('''\
             self.marks = jevois.Parameter(self, "framemark", "bool", "send MARK STOP after each frame", True, pc)
             self.add(pc, "step", "int", "window step", foranav_helper.STEP)
             self.add(pc, "hsthresh", "float", "colour test threshold", self.model_threshold())
+
+        def model_threshold(self):
+            # A default only known once the module runs: it comes from the model file.
+            folder = os.path.dirname(os.path.abspath(__file__))
+            return 0.1 * len(np.load(os.path.join(folder, MODEL))["weights"])
 
         def add(self, category, name, kind, description, default):
             setattr(self, name, jevois.Parameter(self, name, kind, description, default, category))
