@@ -53,7 +53,7 @@ def entry(root: Path, relative: str) -> Entry:
     path = on_card(root, relative)
     try:
         info = os.stat(str(path))
-    except FileNotFoundError:
+    except (FileNotFoundError, NotADirectoryError):  # under a file: check_plan names that file
         return Entry("missing")
     if stat.S_ISDIR(info.st_mode):
         return Entry("folder")
