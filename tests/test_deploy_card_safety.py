@@ -9,7 +9,8 @@ import sys
 import pytest
 
 from host_tools import cli
-from host_tools.deploy import card_fs
+from host_tools.deploy import card, card_fs
+from host_tools.errors import ForaNavError
 from test_deploy_card import BAD_INPUT_EXIT, MODULE, tree_digest
 from test_deploy_fixtures import USER_VIDEOMAPPINGS, make_card, make_module_folder
 
@@ -157,3 +158,26 @@ def test_that_the_next_deploy_removes_the_temporary_file_a_killed_deploy_left(ca
     assert _temp_files(sd) == ["config/.my-notes.tmp"]
     assert "interrupted deploy, removed" in capsys.readouterr().out
     assert "ForaNavTrees" in (sd / VIDEOMAPPINGS).read_text()
+
+
+def test_that_an_unrelated_symlink_off_the_card_in_config_does_not_block_the_deploy(card_and_module, tmp_path):
+    sd, module_dir = card_and_module
+    (tmp_path / "elsewhere.cfg").write_text("x\n")
+    os.symlink(str(tmp_path / "elsewhere.cfg"), str(sd / "config" / "other-tool.cfg"))
+    assert deploy(sd, module_dir) == 0
+    assert (tmp_path / "elsewhere.cfg").read_text() == "x\n"
+
+
+def test_that_a_folder_deploy_may_not_write_in_is_refused_before_writing():
+    # Pure: check_plan against what inspect_plan would report for a read-only config/ (root ignores modes, so
+    # the entry is made up here rather than by chmod).
+    plan = card.DeployPlan([card.FileChange("modules/V/M/a.py", "create", b"a"),
+                            card.FileChange(VIDEOMAPPINGS, "update", b"b", VIDEOMAPPINGS + ".foranav-bak-1")], [])
+    entries = {"modules": card_fs.Entry("folder"), "modules/V": card_fs.Entry("missing"),
+               "modules/V/M": card_fs.Entry("missing"), "modules/V/M/a.py": card_fs.Entry("missing"),
+               "config": card_fs.Entry("folder", write_protected=True), VIDEOMAPPINGS: card_fs.Entry("file"),
+               VIDEOMAPPINGS + ".foranav-bak-1": card_fs.Entry("missing")}
+    with pytest.raises(ForaNavError, match="config/ is not writable"):
+        card.check_plan(plan, entries, force=True, shown_root="SD")
+    entries["config"] = card_fs.Entry("folder")
+    card.check_plan(plan, entries, force=False, shown_root="SD")

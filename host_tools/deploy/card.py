@@ -143,12 +143,23 @@ def check_card(root):
     return real
 
 
-def _relative_files(root, folder):
+def _relative_files(root, folder, needed=None):
+    """Card paths of the files in `folder`. A symlink off the card is refused if deploy needs that file
+    (`needed` None: every file of the folder), and otherwise left out: deploy neither reads nor writes it."""
     if card_fs.entry(root, folder).kind != "folder":
         return []
     base = card_fs.on_card(root, folder)
-    names = [folder + "/" + path.name for path in sorted(base.iterdir())]
-    return [name for name in names if card_fs.entry(root, name).kind == "file"]
+    names = []
+    for name in (folder + "/" + path.name for path in sorted(base.iterdir())):
+        try:
+            kind = card_fs.entry(root, name).kind
+        except ForaNavError:
+            if needed is None or name in needed:
+                raise
+            continue
+        if kind == "file":
+            names.append(name)
+    return names
 
 
 def _module_folders(vendor, module):
@@ -166,7 +177,7 @@ def read_card(root, vendor, module):
         card_fs.on_card(root, folder)
     folder = module_dir(vendor, module)
     module_files = _relative_files(root, folder)
-    names = _relative_files(root, CONFIG_DIR) + module_files
+    names = _relative_files(root, CONFIG_DIR, (VIDEOMAPPINGS, INITSCRIPT)) + module_files
     wanted = set(module_files) | {VIDEOMAPPINGS, INITSCRIPT}
     try:
         files = {name: card_fs.on_card(root, name).read_bytes() for name in names if name in wanted}
@@ -194,6 +205,10 @@ def check_plan(plan, entries, force, shown_root):
             if entries[folder].kind not in ("folder", "missing"):
                 raise ForaNavError("--sd %s: %s is a %s where deploy needs a folder; move it away and deploy "
                                    "again" % (shown_root, folder, entries[folder].kind))
+        parent = entries[_parents(change.path)[-1]]
+        if parent.kind == "folder" and parent.write_protected:
+            raise ForaNavError("--sd %s: %s/ is not writable (mounted read-only, or its permissions?)"
+                               % (shown_root, _parents(change.path)[-1]))
         kind = entries[change.path].kind
         if change.action == "remove":
             continue

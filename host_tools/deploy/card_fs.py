@@ -33,7 +33,8 @@ _NO_DIR_FSYNC = (errno.EINVAL, errno.ENOTSUP, errno.EBADF, errno.EACCES, errno.E
 class Entry:
     """What is at a card path now (after following symlinks that stay on the card)."""
     kind: str  # "file", "folder", "missing" or "other" (a device, a fifo, a socket)
-    write_protected: bool = False  # a file with no write permission for anyone (FAT's read-only attribute)
+    # A file with no write permission for anyone (FAT's read-only attribute), or a folder we may not write in.
+    write_protected: bool = False
 
 
 def real_root(root) -> Path:
@@ -44,8 +45,8 @@ def on_card(root: Path, relative: str) -> Path:
     """The real path of `relative` under the card's (real) root; ForaNavError when a symlink leads off the card."""
     real = os.path.realpath(str(root / relative))
     if real != str(root) and not real.startswith(str(root) + os.sep):
-        raise ForaNavError("--sd %s: %s is a symlink to %s, off the card; deploy never writes through it "
-                           "(replace the link by a file or folder on the card)" % (root, relative, real))
+        raise ForaNavError("--sd %s: %s leads off the card (a symlink, to %s); deploy never reads or writes "
+                           "through it: replace the link by a file or folder on the card" % (root, relative, real))
     return Path(real)
 
 
@@ -56,7 +57,7 @@ def entry(root: Path, relative: str) -> Entry:
     except (FileNotFoundError, NotADirectoryError):  # under a file: check_plan names that file
         return Entry("missing")
     if stat.S_ISDIR(info.st_mode):
-        return Entry("folder")
+        return Entry("folder", not os.access(str(path), os.W_OK | os.X_OK))
     if not stat.S_ISREG(info.st_mode):
         return Entry("other")
     # Root may write anything, so os.access alone would miss a read-only file on a card mounted by root.
@@ -99,10 +100,21 @@ def _set_mode(path: str, mode: int) -> None:
         pass
 
 
+def _make_folders(folder: Path) -> None:
+    """mkdir -p, with each new folder's entry fsync'ed into its parent."""
+    missing = []
+    while not folder.exists():
+        missing.append(folder)
+        folder = folder.parent
+    for new in reversed(missing):
+        new.mkdir()
+        _fsync_folder(new.parent)
+
+
 def write_file(root: Path, relative: str, data: bytes, mode: int) -> None:
     """Write `data` to the card path durably: temporary file, fsync, rename, fsync of the folder."""
     target = on_card(root, relative)
-    target.parent.mkdir(parents=True, exist_ok=True)
+    _make_folders(target.parent)
     fd, tmp = tempfile.mkstemp(prefix="." + target.name + TEMP_MARK, dir=str(target.parent))
     try:
         with os.fdopen(fd, "wb") as handle:
