@@ -51,30 +51,30 @@ class DeployPlan:
     notes: list
 
 
-def module_dir(vendor, module):
+def module_dir(vendor: str, module: str) -> str:
     return "%s/%s/%s" % (MODULES_DIR, vendor, module)
 
 
-def decode(data):
+def decode(data: bytes) -> str:
     return data.decode(*TEXT_CODEC)
 
 
-def encode(text):
+def encode(text: str) -> bytes:
     return text.encode(*TEXT_CODEC)
 
 
-def backup_path(path, names):
+def backup_path(path: str, names) -> str:
     """`<path>.foranav-bak-<n>`, n one more than the highest backup of `path` already on the card."""
     numbers = [int(m.group("n")) for m in (_BACKUP_RE.match(name) for name in names)
                if m and m.group("path") == path]
     return "%s%s%d" % (path, BACKUP_MARK, max(numbers, default=0) + 1)
 
 
-def is_backup(path):
+def is_backup(path: str) -> bool:
     return _BACKUP_RE.match(path) is not None
 
 
-def plan_file(state, path, data, detail=()):
+def plan_file(state: CardState, path: str, data: bytes, detail=()) -> FileChange:
     old = state.files.get(path)
     if old is None:
         return FileChange(path, "create", data, None, tuple(detail))
@@ -96,7 +96,7 @@ def _initscript_changes(state, vendor, module, mode, headless):
     return [], []
 
 
-def plan_deploy(state, payload, vendor, module, mode, headless):
+def plan_deploy(state: CardState, payload: dict, vendor: str, module: str, mode, headless: bool) -> DeployPlan:
     """The changes that install `payload` ({file name: bytes}) as modules/<vendor>/<module>/ and register it.
 
     Pure: `state` is what read_card returned. Module files come first and config files last, so the camera never
@@ -120,7 +120,7 @@ def plan_deploy(state, payload, vendor, module, mode, headless):
     return DeployPlan(removals + changes, notes)
 
 
-def check_card(root):
+def check_card(root) -> Path:
     """Adapter: refuse a PATH that is not a mounted JEVOIS partition, with one line that says what to give."""
     root = Path(root)
     if not root.is_dir():
@@ -166,7 +166,7 @@ def _module_folders(vendor, module):
     return [MODULES_DIR + "/" + vendor, module_dir(vendor, module)]
 
 
-def read_card(root, vendor, module):
+def read_card(root, vendor: str, module: str) -> CardState:
     """Adapter: CardState with the bytes of every file the deploy may change and the names already present.
 
     Every path it reads is resolved first: a symlink off the card stops the deploy here, before any write.
@@ -193,7 +193,7 @@ def _parents(path):
     return ["/".join(parts[:i]) for i in range(1, len(parts) + 1)]
 
 
-def check_plan(plan, entries, force, shown_root):
+def check_plan(plan: DeployPlan, entries: dict, force: bool, shown_root) -> None:
     """Pure: the plan against what is on the card (`entries`: {card path: card_fs.Entry}, for every path the
     plan writes, its backups and their folders). ForaNavError on the first path that would fail or that the
     user protected; nothing has been written yet."""
@@ -226,7 +226,7 @@ def check_plan(plan, entries, force, shown_root):
                            % (shown_root, protected[0], more))
 
 
-def inspect_plan(root, plan):
+def inspect_plan(root, plan: DeployPlan) -> dict:
     """Adapter: card_fs.Entry of every path `plan` touches (raises if one leads off the card)."""
     root = card_fs.real_root(root)
     paths = set()
@@ -235,12 +235,12 @@ def inspect_plan(root, plan):
     return {path: card_fs.entry(root, path) for path in sorted(paths)}
 
 
-def preflight(root, plan, force):
+def preflight(root, plan: DeployPlan, force: bool) -> None:
     """Adapter: everything the writes need is checked before the first one (see check_plan)."""
     check_plan(plan, inspect_plan(root, plan), force, root)
 
 
-def apply_plan(root, plan):
+def apply_plan(root, plan: DeployPlan) -> None:
     """Adapter: remove stray temporary files, back up every file that changes, then write the new contents
     durably, in plan order."""
     shown, root = root, card_fs.real_root(root)
@@ -267,7 +267,7 @@ def apply_plan(root, plan):
                            % (shown, len(done), ", ".join(done[-3:]) or "none", err))
 
 
-def describe_plan(plan, root, dry_run):
+def describe_plan(plan: DeployPlan, root, dry_run: bool) -> list:
     """The lines `foranav deploy` prints: one per file, what is added to config files, then the notes."""
     verb = {"create": "create", "update": "update", "same": "keep  ", "remove": "remove"}
     lines = ["%s %s:" % ("Would change" if dry_run else "Changed", root)]
@@ -283,5 +283,5 @@ def describe_plan(plan, root, dry_run):
     return lines
 
 
-def changed_paths(plan):
+def changed_paths(plan: DeployPlan) -> list:
     return [change.path for change in plan.changes if change.action in ("create", "update")]

@@ -144,8 +144,9 @@ def _check_own_params(own, probe):
                                % (name, value, probe.refusals[(name, value)]))
 
 
-def build_module_payload(files, vendor, mode, module_name=MODULE_NAME, default_model=DEFAULT_MODEL,
-                         card_files=None, force=False, card_label=None):
+def build_module_payload(files: dict, vendor: str, mode, module_name: str = MODULE_NAME,
+                         default_model: str = DEFAULT_MODEL, card_files: dict | None = None, force: bool = False,
+                         card_label: str | None = None) -> ModulePayload:
     """ModulePayload for modules/<Vendor>/<Module>/ on the card: the validated module files plus script.cfg and
     params.cfg, and notes for the user. `files` is what read_module_folder returned; `card_files` ({name: text})
     holds the card's current params.cfg/script.cfg, whose user settings are merged in (module_cfg);
