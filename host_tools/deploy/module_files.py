@@ -33,7 +33,6 @@ MODEL_NAME_RE = re.compile(r"^foranav_\w+\.npz$")
 NAME_RE = re.compile(r"^[A-Z][A-Za-z0-9_]*$")  # JeVois Inventor wants an uppercase first letter
 
 
-
 @dataclass(frozen=True)
 class ModulePayload:
     files: dict  # {file name: bytes}, sorted by name
