@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: setup test demo bench paper-tests deploy clean camera-runtime
+.PHONY: setup test demo bench paper-tests deploy clean camera-runtime docs
 
 setup: $(STAMP)
 
@@ -21,6 +21,10 @@ test: $(STAMP) camera-runtime
 # machine's Python 3.7 (a stamp file inside makes a second run a no-op); tests/test_camera_runtime.py uses it.
 camera-runtime: $(STAMP)
 	$(BIN)/python -m host_tools.jevois_host.camera_runtime build
+
+# docs/reference/*.md from the code (commands, flight app PARAMs, camera module parameters)
+docs: $(STAMP)
+	$(BIN)/python -m host_tools.docs_gen
 
 demo: $(STAMP)
 	$(BIN)/foranav demo
