@@ -33,8 +33,8 @@ def rendered_frames(folder: Path) -> list:
     paths = []
     rng = np.random.default_rng(11)
     map1 = load_map("map1")
-    shots = [(map1, SMALL, (t.x + dx, t.y + dy, map1.altitude_m, yaw))
-             for t, dx, dy, yaw in zip(map1.trees[:4], (0.0, 0.2, -0.15, 0.1), (0.0, -0.2, 0.1, 0.25), (0, 15, -30, 90))]
+    offsets = zip((0.0, 0.2, -0.15, 0.1), (0.0, -0.2, 0.1, 0.25), (0, 15, -30, 90))  # dx, dy (m), yaw (deg)
+    shots = [(map1, SMALL, (t.x + dx, t.y + dy, map1.altitude_m, yaw)) for t, (dx, dy, yaw) in zip(map1.trees, offsets)]
     shots += [(MIXED_MAP, SMALL, (t.x, 0.05, MIXED_MAP.altitude_m, 0.0)) for t in MIXED_MAP.trees]
     shots += [(map1, LARGE, (map1.trees[1].x, map1.trees[1].y, map1.altitude_m, 0.0)),
               (MIXED_MAP, LARGE, (1.2, 0.0, 1.5, 0.0))]

@@ -2,6 +2,7 @@
 import importlib
 import io
 import os
+import shutil
 import subprocess
 import sys
 
@@ -13,6 +14,7 @@ from host_tools.jevois_host import DEFAULT_MODULE_DIR, ModuleRunner, libjevois, 
 from host_tools.maps import load_map
 from host_tools.sim.camera import CameraModel, Pose
 from host_tools.sim.world import SENSOR_EFFECTS, World
+from jevois_module.ForaNavTrees import foranav_serial
 
 HELPERS = sorted(f[:-3] for f in os.listdir(DEFAULT_MODULE_DIR) if f.startswith("foranav_") and f.endswith(".py"))
 REPO_ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -145,3 +147,29 @@ def test_that_two_runners_in_turn_keep_their_own_streams_and_counts():
     assert runner_one.frame_number == 2 and runner_two.frame_number == 1
     assert "N2 " not in one.getvalue() and one.getvalue().count("MARK STOP") == 2
     assert two.getvalue().count("MARK STOP") == 1 and two.getvalue().startswith("N2 oil_palm ")
+
+
+def test_that_each_load_runs_the_files_of_the_folder_it_was_given(tmp_path, monkeypatch):
+    # Fixture: a copy of the module folder whose main file and one helper differ from the repository's
+    copy = tmp_path / "ForaNavTrees"
+    shutil.copytree(DEFAULT_MODULE_DIR, copy, ignore=shutil.ignore_patterns("__init__.py", "__pycache__"))
+    main = copy / "ForaNavTrees.py"
+    main.write_text(main.read_text().replace('"serstyle", "str", "Serial message', '"serstyle", "str", "Copy:'))
+    helper = copy / "foranav_serial.py"
+    helper.write_text(helper.read_text().replace('FRAME_STOP = "MARK STOP"', 'FRAME_STOP = "MARK END"'))
+    monkeypatch.setattr(sys, "path", list(sys.path))
+    frame = rendered(1, seed=4)[0]
+
+    def last_line_and_doc(module_dir=None):
+        runner = ModuleRunner(module_dir=module_dir)
+        return runner.process_frame(frame)[-1], libjevois.parameters(runner.instance)["serstyle"].description
+
+    # Test: the repository's, the copy, the repository's again, in one process
+    first = last_line_and_doc()
+    from_copy = last_line_and_doc(str(copy))
+    again = last_line_and_doc()
+    # Assert
+    assert first == again and first[0] == "MARK STOP" and not first[1].startswith("Copy:")
+    assert from_copy[0] == "MARK END" and from_copy[1].startswith("Copy:")
+    assert sys.modules["foranav_serial"] is foranav_serial
+    assert sys.modules["ForaNavTrees"].foranav_serial is foranav_serial

@@ -6,7 +6,10 @@ reloaded, as the engine does), the class is constructed with no arguments, ``ini
 ``params`` (like the module's params.cfg) are applied.
 
 Each load starts from clean bindings (``libjevois.reset()``) and each runner counts its own frames, so a
-run never sees what an earlier run in the same process left behind.
+run never sees what an earlier run in the same process left behind. On the host several module folders may be
+loaded in one process (the repository's, a card copy, a test's modified copy): the folder being loaded goes
+first on ``sys.path`` and a module of the same name loaded from another folder is dropped from
+``sys.modules`` first, so the files of the folder asked for are the ones that run.
 
 This file runs on the host and in the camera's own runtime (Python 3.7, see ``camera_driver.py``): keep it
 to the 3.7 subset and the standard library.
@@ -35,8 +38,7 @@ def load_module(module_dir: str | None = None, serial_stream=None, params: dict 
     standin.reset()
     standin.configure(serial_stream=serial_stream, log_stream=log_stream)
     sys.modules["libjevois"] = standin
-    if module_dir not in sys.path:
-        sys.path.append(module_dir)
+    _use_folder(module_dir)
     module = importlib.reload(sys.modules[name]) if name in sys.modules else importlib.import_module(name)
     instance = getattr(module, name)()
     if hasattr(instance, "init"):
@@ -44,6 +46,24 @@ def load_module(module_dir: str | None = None, serial_stream=None, params: dict 
     for key, value in (params or {}).items():
         setpar(instance, key, value)
     return instance, standin
+
+
+def _loaded_from(module, folder: str) -> bool:
+    path = getattr(module, "__file__", None)
+    return path is not None and os.path.dirname(os.path.abspath(path)) == folder
+
+
+def _use_folder(module_dir: str) -> None:
+    """Make the files of ``module_dir`` the ones ``import`` finds by plain name (the camera's way)."""
+    if module_dir in sys.path:
+        sys.path.remove(module_dir)
+    sys.path.insert(0, module_dir)
+    for filename in sorted(os.listdir(module_dir)):
+        plain = filename[:-3]
+        if filename.endswith(".py") and filename != "__init__.py":
+            loaded = sys.modules.get(plain)
+            if loaded is not None and not _loaded_from(loaded, module_dir):
+                del sys.modules[plain]  # another folder's copy, from an earlier load
 
 
 def setpar(instance, name: str, value) -> None:
