@@ -60,13 +60,12 @@ def run_frames(module_dir, frames, params, with_usb=False):
 
 
 def model_digests(module_dir):
-    """{model file: {array name: "dtype shape sha256"}} of every shipped model, as the module's loader reads it."""
-    import foranav_model  # the module's own loader, found on the module folder (load_module put it on sys.path)
-
+    """{model file: {array name: "dtype shape sha256"}} of every shipped model, loaded by the module itself."""
+    instance, _standin = engine.load_module(module_dir, log_stream=_NullLog())
     digests = {}
-    for path in sorted(glob.glob(os.path.join(module_dir, MODEL_PATTERN))):
-        arrays = foranav_model.load_model(path).to_arrays()
-        digests[os.path.basename(path)] = {
+    for name in shipped_models(module_dir):
+        arrays = instance.loadModel(name).to_arrays()
+        digests[name] = {
             key: "%s %s %s" % (np.asarray(value).dtype.str, list(np.asarray(value).shape),
                                hashlib.sha256(np.ascontiguousarray(value).tobytes()).hexdigest())
             for key, value in sorted(arrays.items())}
