@@ -181,3 +181,14 @@ def test_that_a_folder_deploy_may_not_write_in_is_refused_before_writing():
         card.check_plan(plan, entries, force=True, shown_root="SD")
     entries["config"] = card_fs.Entry("folder")
     card.check_plan(plan, entries, force=False, shown_root="SD")
+
+
+def test_that_a_dry_run_lists_a_stray_temporary_file_and_the_deploy_removes_it(card_and_module, capsys):
+    # The name host_tools.fileio gave its temporary files, as a deploy killed before this version left them.
+    sd, module_dir = card_and_module
+    stray = sd / "config" / ".videomappings.k2j_9xq1.cfg.tmp.cfg"
+    stray.write_text("half")
+    assert deploy(sd, module_dir, "--dry-run") == 0
+    assert "remove config/.videomappings.k2j_9xq1.cfg.tmp.cfg" in capsys.readouterr().out and stray.exists()
+    assert deploy(sd, module_dir) == 0
+    assert not stray.exists()

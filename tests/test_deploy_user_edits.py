@@ -76,7 +76,7 @@ def test_that_a_new_parameter_of_the_new_release_is_added_and_reported(deployed,
     assert "new in this module release: minarea" in capsys.readouterr().out
 
 
-def test_that_forana_v_lines_are_recomputed_when_the_mode_changes_but_user_lines_are_not(deployed):
+def test_that_foranavs_lines_are_recomputed_when_the_mode_changes_but_user_lines_are_not(deployed):
     sd, module_dir = deployed
     edit(sd / SCRIPT, "#setcam absexp 200", "setcam absexp 150")
     assert deploy(sd, module_dir, "--mode", "352x288@60") == 0
