@@ -20,7 +20,6 @@ species is the target species and the tree lies within ``COLUMN_RULE_FACTOR`` x 
 Bad files raise ForaNavError with one line naming the file and the field, e.g.
 ``maps/x.json: trees[2].crown_m: must be a positive number``.
 """
-import json
 import math
 from dataclasses import dataclass, field, asdict
 from pathlib import Path
@@ -230,14 +229,7 @@ def resolve_map_path(name_or_path):
 def load_map(name_or_path):
     """Load and validate a map file (or a built-in map by name)."""
     path = resolve_map_path(name_or_path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as err:
-        raise ForaNavError("%s: cannot read map file: %s" % (path, err.strerror or err))
-    try:
-        data = json.loads(text, parse_constant=lambda c: float("nan"))
-    except json.JSONDecodeError as err:
-        raise ForaNavError("%s: not valid JSON: %s (line %d)" % (path, err.msg, err.lineno))
+    data = fileio.read_json(path, "map file", parse_constant=lambda c: float("nan"))
     return map_from_dict(data, str(path))
 
 
