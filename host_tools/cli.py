@@ -122,6 +122,7 @@ def main(argv=None):
         print("foranav %s: interrupted" % name, file=sys.stderr)
         return 130
     finally:
+        guard.flush()  # a reader gone at the very end must not turn a finished run into an error
         if sys.stdout is guard:
             sys.stdout = original
 

@@ -60,7 +60,7 @@ def write_json(path, obj, indent=2):
 # ---- output locations, checked before the work starts -------------------------------------------------------
 
 
-def _probe_writable(folder: Path) -> str:
+def writable_reason(folder: Path) -> str:
     """'' when a file can be created in the existing folder, else the reason (tries it: permissions, ACLs,
     read-only mounts and immutable folders all count, also for root)."""
     try:
@@ -92,7 +92,7 @@ def check_output_file(path, option: str = "--out") -> Path:
         raise ForaNavError("%s %s: folder %s does not exist" % (option, path, parent))
     if not parent.is_dir():
         raise ForaNavError("%s %s: %s is not a folder" % (option, path, parent))
-    reason = _probe_writable(parent)
+    reason = writable_reason(parent)
     if reason:
         raise ForaNavError("%s %s: cannot write in %s: %s" % (option, path, parent, reason))
     return path
@@ -110,7 +110,7 @@ def check_output_dir(path, option: str = "--out") -> Path:
     existing = _nearest_existing(path)
     if not existing.is_dir():
         raise ForaNavError("%s %s: %s is a file, not a folder" % (option, path, existing))
-    reason = _probe_writable(existing)
+    reason = writable_reason(existing)
     if reason:
         raise ForaNavError("%s %s: cannot write in %s: %s" % (option, path, existing, reason))
     return path

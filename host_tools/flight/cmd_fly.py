@@ -177,7 +177,7 @@ def run(args):
     pmap = load_map(args.map)
     if args.hide_tree is not None and args.hide_tree not in {tree.id for tree in pmap.trees}:
         raise ForaNavError("--hide-tree: map %s has no tree %d (its trees: %s)" % (
-            pmap.name, args.hide_tree, ", ".join(str(tree.id) for tree in pmap.trees)))
+            args.map, args.hide_tree, ", ".join(str(tree.id) for tree in pmap.trees)))
     kwargs = _camera_kwargs(args)
     if args.realtime:
         camera = None

@@ -15,7 +15,7 @@ from host_tools.sim.path import path_length, poses_along_path
 from host_tools.sim.world import World
 
 MAX_FPS = 120.0  # the fastest JeVois-A33 sensor mode
-MAX_FRAMES = 100000  # about 3 hours at 9 fps: a longer clip is a typo (--speed 0.0001), not a recording
+MAX_FRAMES = 50000  # 1.5 hours at 9 fps: a longer clip is a typo (--speed 0.0001), not a recording
 
 
 def add_arguments(parser):
