@@ -105,8 +105,17 @@ def parse_command(argv):
     return name, module, args
 
 
+def quiet_opencv():
+    """OpenCV and its FFmpeg print warnings straight to stderr (a missing image, a damaged video) next to the
+    CLI's own one-line error; set before cv2 loads. OPENCV_LOG_LEVEL / OPENCV_FFMPEG_LOGLEVEL set by the user
+    still win."""
+    os.environ.setdefault("OPENCV_LOG_LEVEL", "ERROR")
+    os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")  # AV_LOG_QUIET
+
+
 def main(argv=None):
     argv = list(sys.argv[1:] if argv is None else argv)
+    quiet_opencv()
     try:
         name, module, args = parse_command(argv)
     except SystemExit as done:  # --help (0) or an argument error (2), already printed

@@ -53,6 +53,10 @@ def inputs(tmp_path_factory):
     (root / "latin1_clip" / "clip.json").write_bytes(b'{"format": "foranav-clip", "name": "\xff"}')
     (root / "deep_clip").mkdir()
     (root / "deep_clip" / "clip.json").write_text('{"format": ' + "[" * DEEP + "]" * DEEP + "}")
+    (root / "cut_video").mkdir()
+    (root / "cut_video" / "clip.json").write_bytes((FIXTURE_CLIP / "clip.json").read_bytes())
+    video = (FIXTURE_CLIP / "clip.avi").read_bytes()
+    (root / "cut_video" / "clip.avi").write_bytes(video[:len(video) // 2])
     (root / "frames_not_list").mkdir()
     sidecar["frames"] = 7
     (root / "frames_not_list" / "clip.json").write_text(json.dumps(sidecar))
@@ -183,6 +187,7 @@ CASES = [
     (["replay", "{in}/deep_clip"], "clip.json"),
     (["replay", "{in}/frames_not_list"], "frames"),
     (["replay", "no_such_clip"], "no_such_clip"),
+    (["replay", "{in}/cut_video"], "clip.avi"),
     (["replay", CLIP, "--latency-ms", "-1"], "--latency-ms"),
     (["replay", CLIP, "--latency-ms", "70000"], "--latency-ms"),
     (["replay", CLIP, "--map", "{in}/latin1.json"], "latin1.json"),
@@ -256,9 +261,12 @@ def run_foranav(*args, **kwargs):
     return subprocess.run([sys.executable, "-m", "host_tools.cli"] + [str(a) for a in args], text=True, **kwargs)
 
 
-def test_that_a_real_process_prints_one_line_and_exits_2_for_bad_numbers(tmp_path):
+def test_that_a_real_process_prints_one_line_and_exits_2(tmp_path, inputs):
+    # a real stderr: OpenCV's and FFmpeg's own warnings (missing image, damaged video) would show here
     for args, named in ((RENDER + ["--x", "nan", "--out", tmp_path / "f.png"], "--x"),
-                        (["record", "--map", "map1", "--out", tmp_path / "c", "--fps", "1e9"], "--fps")):
+                        (["record", "--map", "map1", "--out", tmp_path / "c", "--fps", "1e9"], "--fps"),
+                        (["replay", inputs / "cut_video"], "clip.avi"),
+                        (["detect", tmp_path / "missing.png"], "missing.png")):
         proc = run_foranav(*args, capture_output=True)
         assert proc.returncode == 2
         assert len(proc.stderr.splitlines()) == 1 and named in proc.stderr

@@ -60,6 +60,7 @@ def run(args):
     from host_tools.sim.clip import read_clip
 
     clip = read_clip(args.clip)
+    clip.check_video()
     pmap = load_map(args.map) if args.map else None
     if args.latency_ms is not None and args.latency_ms < 0:
         raise ForaNavError("--latency-ms: must not be negative")

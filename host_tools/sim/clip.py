@@ -81,6 +81,27 @@ class Clip:
         finally:
             capture.release()
 
+    def check_video(self):
+        """ForaNavError unless the video opens and holds at least one frame per sidecar record, of the camera's
+        size (a truncated or swapped video would otherwise replay part of the clip without a word)."""
+        capture = cv2.VideoCapture(str(self.video_path))
+        if not capture.isOpened():
+            raise ForaNavError("%s: cannot open video" % self.video_path)
+        try:
+            count = 0
+            ok, image = capture.read()
+            if ok and image.shape[1::-1] != (self.camera.width, self.camera.height):
+                raise ForaNavError("%s: frames are %dx%d, the sidecar's camera %dx%d" % (
+                    self.video_path, image.shape[1], image.shape[0], self.camera.width, self.camera.height))
+            while ok and count < len(self.frames):
+                count += 1
+                ok = capture.grab()
+        finally:
+            capture.release()
+        if count < len(self.frames):
+            raise ForaNavError("%s: %d frames, the sidecar has %d (truncated video?)"
+                               % (self.video_path, count, len(self.frames)))
+
     def __len__(self):
         return len(self.frames)
 
