@@ -147,3 +147,5 @@ def read_json(path, what: str = "JSON file", **loads_kwargs):
         raise ForaNavError("%s: not valid JSON: %s (line %d)" % (path, err.msg, err.lineno))
     except RecursionError:
         raise ForaNavError("%s: JSON nested too deeply" % path)
+    except ValueError as err:  # e.g. an integer of more digits than int() converts
+        raise ForaNavError("%s: not valid JSON: %s" % (path, err))

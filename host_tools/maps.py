@@ -31,6 +31,8 @@ SPECIES = ("oil_palm", "coconut", "date_palm", "citrus", "olive")
 OBJECT_KINDS = ("roof", "road_cross")
 COLUMN_RULE_FACTOR = 1.5  # paper: trees farther than 1.5 crown sizes from the path are outside the column
 BUILTIN_DIR = Path(__file__).resolve().parent / "data" / "maps"
+MAX_SEED = 2 ** 32 - 1  # numpy's RandomState takes seeds up to this
+MAX_INTEGER_NUMBER = 10 ** 15  # an integer beyond this in a map is a typo (and beyond 1e308 float() fails)
 
 
 @dataclass(frozen=True)
@@ -107,6 +109,8 @@ class _Checker:
         value = obj[key]
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             self.fail(where + key, "must be a number, got %s" % type(value).__name__)
+        if isinstance(value, int) and abs(value) > MAX_INTEGER_NUMBER:
+            self.fail(where + key, "number too large")
         if not math.isfinite(value):
             self.fail(where + key, "must be finite, got %r" % value)
         if positive and value <= 0:
@@ -157,6 +161,8 @@ def map_from_dict(data, source="<map>"):
     altitude = c.number(data, "altitude_m", "", positive=True)
     target_species = c.string(data, "target_species", "", SPECIES) if "target_species" in data else "oil_palm"
     seed = c.integer(data, "seed", "") if "seed" in data else 0
+    if not 0 <= seed <= MAX_SEED:
+        c.fail("seed", "must be an integer from 0 to %d, got %d" % (MAX_SEED, seed))
 
     raw_wps = c.array(data, "waypoints", "")
     if len(raw_wps) < 2:

@@ -44,6 +44,10 @@ def inputs(tmp_path_factory):
     (root / "truncated.json").write_text('{"name": "map", "altitude_m": 1.2')
     write_map(root / "nan_altitude.json", altitude_m=float("nan"))
     write_map(root / "no_trees_field.json", trees="none")
+    write_map(root / "negative_seed.json", seed=-4)
+    text = (Path(cli.__file__).parent / "data" / "maps" / "map1.json").read_text()
+    (root / "big_int.json").write_text(text.replace('"altitude_m": 1.25', '"altitude_m": 1' + "0" * 400))
+    (root / "huge_int.json").write_text(text.replace('"altitude_m": 1.25', '"altitude_m": 1' + "0" * 5000))
     (root / "folder.json").mkdir()
     sidecar = json.loads((FIXTURE_CLIP / "clip.json").read_text())
     sidecar["frames"][3]["t_s"] = sidecar["frames"][1]["t_s"]  # time running backwards
@@ -105,7 +109,8 @@ def snapshot(root):
 MAP_ROWS = [  # map inputs, the same for every command that reads a map
     ("{in}/latin1.json", "latin1.json"), ("{in}/deep.json", "deep.json"), ("{in}/truncated.json", "truncated.json"),
     ("{in}/nan_altitude.json", "altitude_m"), ("{in}/no_trees_field.json", "trees"),
-    ("{in}/folder.json", "folder.json"), ("no_such_map", "no_such_map")]
+    ("{in}/folder.json", "folder.json"), ("no_such_map", "no_such_map"), ("{in}/negative_seed.json", "seed"),
+    ("{in}/big_int.json", "altitude_m"), ("{in}/huge_int.json", "huge_int.json")]
 RENDER = ["render", "--map", "map1", "--x", "1", "--y", "0"]
 RECORD = ["record", "--map", "map1"]
 FLY = ["fly", "--map", "map1", "--camera", "oracle"]
