@@ -5,8 +5,10 @@ exactly one line, naming the option or file; no traceback; nothing written or le
 command writes (the scratch folder, holding pre-existing outputs, keeps every name and byte). A few rows run
 a real subprocess; a broken stdout pipe (`foranav train ... | head`) must not stop the work.
 """
+import copy
 import json
 import os
+import random
 import shutil
 import struct
 import subprocess
@@ -20,7 +22,8 @@ import pytest
 from host_tools import cli, fileio, images
 from host_tools.annotations import read_boxes
 from host_tools.errors import ForaNavError
-from host_tools.sim.clip import read_clip
+from host_tools.maps import map_from_dict
+from host_tools.sim.clip import clip_from_dict, read_clip
 
 FIXTURE_CLIP = Path(__file__).parent / "fixtures" / "clips" / "map3_short_sensor"
 OLD_BYTES = b"an output from an earlier run\n"
@@ -360,3 +363,48 @@ def test_that_images_claiming_huge_sizes_or_cut_short_are_refused_before_decodin
         with pytest.raises(ForaNavError, match=reason) as caught:
             images.read_image(tmp_path / name)
         assert name in str(caught.value)
+
+
+FUZZ_VALUES = [None, "x", "", [], {}, -1, 0, 1e308, -1e308, 10 ** 20, True, [1, 2], [[1]], {"a": 1}, 3.5,
+               float("nan"), float("inf"), 2 ** 63, "oil_palm"]
+FUZZ_SAMPLES = 600
+
+
+def _json_paths(obj, prefix=()):
+    yield prefix
+    if isinstance(obj, dict):
+        for key, value in obj.items():
+            yield from _json_paths(value, prefix + (key,))
+    elif isinstance(obj, list):
+        for index, value in enumerate(obj[:3]):
+            yield from _json_paths(value, prefix + (index,))
+
+
+def _mutated(obj, rng):
+    """A copy of obj with one value replaced by a value of another type, or one field removed."""
+    obj = copy.deepcopy(obj)
+    path = rng.choice(list(_json_paths(obj))[1:])
+    target = obj
+    for key in path[:-1]:
+        target = target[key]
+    if isinstance(target, dict) and rng.random() < 0.2:
+        del target[path[-1]]
+    else:
+        target[path[-1]] = rng.choice(FUZZ_VALUES)
+    return obj
+
+
+def test_that_map_and_clip_validators_raise_only_foranav_errors_on_damaged_files():
+    rng = random.Random(11)
+    map_data = json.loads((Path(cli.__file__).parent / "data" / "maps" / "map1.json").read_text())
+    clip_data = json.loads((FIXTURE_CLIP / "clip.json").read_text())
+    refused = 0
+    for _ in range(FUZZ_SAMPLES):
+        for validate, data in ((lambda d: map_from_dict(d, "m.json"), map_data),
+                               (lambda d: clip_from_dict(d, FIXTURE_CLIP, "clip.json"), clip_data)):
+            try:
+                validate(_mutated(data, rng))
+            except ForaNavError as err:
+                refused += 1
+                assert "\n" not in str(err)
+    assert refused > FUZZ_SAMPLES  # most damage is caught, none of it as another exception

@@ -185,7 +185,7 @@ def clip_from_dict(data, directory, source_name="<clip>"):
         fail("version", "unsupported version %r (expected %d)" % (data.get("version"), VERSION))
     try:
         camera = CameraModel.from_dict(data["camera"])
-    except (KeyError, TypeError, ValueError) as err:
+    except (KeyError, IndexError, TypeError, ValueError, OverflowError) as err:
         fail("camera", "bad camera: %s" % err)
     fps = data.get("fps")
     if isinstance(fps, bool) or not isinstance(fps, (int, float)) or not fps > 0:
