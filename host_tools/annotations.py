@@ -42,11 +42,11 @@ class Box:
 def read_boxes(csv_path):
     """Read a boxes CSV; raises ForaNavError naming the file and row on bad input."""
     csv_path = Path(csv_path)
+    text = fileio.read_text(csv_path, "boxes CSV")
     try:
-        text = csv_path.read_text(encoding="utf-8")
-    except OSError as err:
-        raise ForaNavError("%s: cannot read: %s" % (csv_path, err.strerror or err))
-    rows = list(csv.reader(io.StringIO(text)))
+        rows = list(csv.reader(io.StringIO(text)))
+    except csv.Error as err:  # e.g. a field over csv.field_size_limit() (128 KiB), a NUL byte
+        raise ForaNavError("%s: not a valid CSV: %s" % (csv_path, err))
     if not rows:
         raise ForaNavError("%s: empty CSV (expected header %s)" % (csv_path, ",".join(HEADER)))
     if tuple(h.strip() for h in rows[0]) != HEADER:

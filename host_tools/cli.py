@@ -3,13 +3,17 @@
 Usage: foranav <command> [options]   (foranav <command> --help for each)
 
 Each command lives in its own module, imported only when it runs, which exposes
-``add_arguments(parser)`` and ``run(args) -> int``. Errors of type ForaNavError (bad input) print one line
-and exit with status 2.
+``add_arguments(parser)`` and ``run(args) -> int``. Bad input never gives a traceback (docs/errors.md): a
+ForaNavError or an argument error prints one line naming the file or option and exits with status 2. A
+reader that goes away (``foranav train ... | head``) does not stop the work: the rest of the output is
+dropped and the command still writes its files.
 """
 import argparse
 import importlib
+import os
 import sys
 
+from host_tools import argtypes
 from host_tools.errors import ForaNavError
 
 # command -> (module, one-line help)
@@ -31,8 +35,55 @@ COMMANDS = {
 }
 
 
+class OneLineParser(argparse.ArgumentParser):
+    """An argument error is one line naming the option (argparse prints the whole usage first)."""
+
+    def error(self, message):
+        self.exit(2, "%s: error: %s (see %s --help)\n" % (self.prog, message, self.prog))
+
+
+class _StdoutGuard(object):
+    """stdout that survives its reader going away: after a broken pipe the output goes to /dev/null."""
+
+    def __init__(self, stream):
+        self._stream = stream
+        self.broken = False
+
+    def _silence(self):
+        self.broken = True
+        try:
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, self._stream.fileno())  # the interpreter's final flush then succeeds too
+            os.close(devnull)
+        except (OSError, ValueError, AttributeError):
+            self._stream = open(os.devnull, "w")
+
+    def write(self, text):
+        try:
+            return self._stream.write(text)
+        except BrokenPipeError:
+            self._silence()
+            return len(text)
+
+    def flush(self):
+        try:
+            self._stream.flush()
+        except BrokenPipeError:
+            self._silence()
+
+    def __getattr__(self, name):
+        return getattr(self._stream, name)
+
+
+def _check_seed(parser, args):
+    """Every command's --seed is a seed (0 .. 2**32 - 1), also where the option is declared as a plain int."""
+    value = getattr(args, "seed", None)
+    if isinstance(value, int) and not 0 <= value <= argtypes.SEED_MAX:
+        parser.error("argument --seed: must be an integer from 0 to %d, got %d" % (argtypes.SEED_MAX, value))
+
+
 def build_parser():
-    parser = argparse.ArgumentParser(prog="foranav", description=__doc__.splitlines()[0])
+    parser = OneLineParser(prog="foranav", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", metavar="<command>")
     sub.required = True
     for name, (module, help_text) in COMMANDS.items():
@@ -40,24 +91,49 @@ def build_parser():
     return parser
 
 
-def main(argv=None):
-    argv = list(sys.argv[1:] if argv is None else argv)
+def parse_command(argv):
+    """(command name, its module, parsed args); SystemExit on --help or an argument error (one line)."""
     if not argv or argv[0] in ("-h", "--help") or argv[0] not in COMMANDS:
         build_parser().parse_args(argv)  # prints usage / error and exits
-        return 2
+        raise SystemExit(2)
     name = argv[0]
     module = importlib.import_module(COMMANDS[name][0])
-    parser = argparse.ArgumentParser(prog="foranav " + name, description=module.__doc__)
+    parser = OneLineParser(prog="foranav " + name, description=module.__doc__)
     module.add_arguments(parser)
     args = parser.parse_args(argv[1:])
+    _check_seed(parser, args)
+    return name, module, args
+
+
+def quiet_opencv():
+    """OpenCV and its FFmpeg print warnings straight to stderr (a missing image, a damaged video) next to the
+    CLI's own one-line error; set before cv2 loads. OPENCV_LOG_LEVEL / OPENCV_FFMPEG_LOGLEVEL set by the user
+    still win."""
+    os.environ.setdefault("OPENCV_LOG_LEVEL", "ERROR")
+    os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")  # AV_LOG_QUIET
+
+
+def main(argv=None):
+    argv = list(sys.argv[1:] if argv is None else argv)
+    quiet_opencv()
+    try:
+        name, module, args = parse_command(argv)
+    except SystemExit as done:  # --help (0) or an argument error (2), already printed
+        return done.code if isinstance(done.code, int) else 2
+    original = sys.stdout
+    guard = sys.stdout = _StdoutGuard(original)
     try:
         return int(module.run(args) or 0)
     except ForaNavError as err:
-        print("foranav %s: error: %s" % (name, err), file=sys.stderr)
+        print("foranav %s: error: %s" % (name, " ".join(str(err).split())), file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("foranav %s: interrupted" % name, file=sys.stderr)
         return 130
+    finally:
+        guard.flush()  # a reader gone at the very end must not turn a finished run into an error
+        if sys.stdout is guard:
+            sys.stdout = original
 
 
 if __name__ == "__main__":

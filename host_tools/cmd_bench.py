@@ -7,6 +7,8 @@ detector: ms per frame and FPS of the tree detector at 352x288, 640x480 and 1280
 """
 import importlib
 
+from host_tools import argtypes
+
 TARGETS = {
     "sim": "host_tools.sim.bench",
     "detector": "host_tools.detection.bench",
@@ -17,7 +19,7 @@ TARGETS = {
 def add_arguments(parser):
     parser.add_argument("target", choices=sorted(TARGETS), help="what to benchmark")
     parser.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the rendered test frames")
+    parser.add_argument("--seed", type=argtypes.seed, default=0, help="seed of the rendered test frames")
 
 
 def run(args):

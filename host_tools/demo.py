@@ -10,6 +10,8 @@ import sys
 import time
 from pathlib import Path
 
+from host_tools import argtypes, fileio
+
 DEMO_MAP = "map1"
 DEMO_SEED = 0
 BAR_WIDTH = 30
@@ -19,7 +21,7 @@ TAKEOFF_AND_LANDING_S = 10.0
 
 def add_arguments(parser):
     parser.add_argument("--out", default="runs/demo", help="output folder (default runs/demo/)")
-    parser.add_argument("--seed", type=int, default=DEMO_SEED, help="seed of every random choice (default 0)")
+    parser.add_argument("--seed", type=argtypes.seed, default=DEMO_SEED, help="seed of every random choice (default 0)")
 
 
 def estimated_mission_s(pmap, cruise_speed):
@@ -66,8 +68,8 @@ def run(args):
     from host_tools.flight.vision_camera import VisionCamera
     from host_tools.maps import load_map
 
+    out = fileio.check_output_dir(Path(args.out))
     pmap = load_map(DEMO_MAP)
-    out = Path(args.out)
     print("ForaNav demo: %s" % pmap.name)
     print("  camera: simulator -> JeVois module (ForaNavTrees, unchanged) -> pty -> Crazyflie app (pyserial)")
     started = time.monotonic()

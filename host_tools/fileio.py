@@ -1,13 +1,20 @@
-"""Atomic file output: nothing already written is lost or left half-written.
+"""Atomic file output: nothing already written is lost or left half-written. Checked input files.
 
 Every writer in the project goes through these helpers: the data is written to a temporary file in the
-target's folder and renamed over the target only once it is complete.
+target's folder and renamed over the target only once it is complete. A command checks its output location
+first (``check_output_file`` / ``check_output_dir``), before any work, so that a wrong ``--out`` costs one
+line, not a whole run. Readers of user files (``read_text`` / ``read_json``) turn every way a file can be
+bad (missing, a folder, not UTF-8, too big, too deeply nested) into a one-line ForaNavError naming it.
 """
 import contextlib
 import json
 import os
 import tempfile
 from pathlib import Path
+
+from host_tools.errors import ForaNavError
+
+MAX_TEXT_BYTES = 256 * 1024 * 1024  # a map, CSV or clip sidecar larger than this is not one of ours
 
 
 def _umask():
@@ -48,3 +55,97 @@ def write_text(path, text: str):
 
 def write_json(path, obj, indent=2):
     write_text(path, json.dumps(obj, indent=indent, sort_keys=False) + "\n")
+
+
+# ---- output locations, checked before the work starts -------------------------------------------------------
+
+
+def writable_reason(folder: Path) -> str:
+    """'' when a file can be created in the existing folder, else the reason (tries it: permissions, ACLs,
+    read-only mounts and immutable folders all count, also for root)."""
+    try:
+        fd, probe = tempfile.mkstemp(prefix=".foranav-probe-", dir=folder)
+    except OSError as err:
+        return err.strerror or str(err)
+    os.close(fd)
+    os.unlink(probe)
+    return ""
+
+
+def _nearest_existing(path: Path) -> Path:
+    path = Path(os.path.abspath(path))
+    while not path.exists() and path != path.parent:
+        path = path.parent
+    return path
+
+
+def check_output_file(path, option: str = "--out") -> Path:
+    """Refuse (ForaNavError) an output file that cannot be written: a folder, a parent folder that is missing
+    or is a file, a read-only folder. Creates nothing."""
+    path = Path(path)
+    if str(path) == "" or path.name in ("", ".", ".."):
+        raise ForaNavError("%s %s: not a file name" % (option, path))
+    if path.is_dir():
+        raise ForaNavError("%s %s: is a folder, expected a file" % (option, path))
+    parent = path.parent
+    if not parent.exists():
+        raise ForaNavError("%s %s: folder %s does not exist" % (option, path, parent))
+    if not parent.is_dir():
+        raise ForaNavError("%s %s: %s is not a folder" % (option, path, parent))
+    reason = writable_reason(parent)
+    if reason:
+        raise ForaNavError("%s %s: cannot write in %s: %s" % (option, path, parent, reason))
+    return path
+
+
+def check_output_dir(path, option: str = "--out") -> Path:
+    """Refuse (ForaNavError) an output folder that cannot be written: an existing file, a path through a file,
+    a read-only folder. A missing folder is fine when it can be created (its nearest existing ancestor is a
+    writable folder); it is not created here."""
+    path = Path(path)
+    if str(path) == "":
+        raise ForaNavError("%s: empty folder name" % option)
+    if path.exists() and not path.is_dir():
+        raise ForaNavError("%s %s: is a file, expected a folder" % (option, path))
+    existing = _nearest_existing(path)
+    if not existing.is_dir():
+        raise ForaNavError("%s %s: %s is a file, not a folder" % (option, path, existing))
+    reason = writable_reason(existing)
+    if reason:
+        raise ForaNavError("%s %s: cannot write in %s: %s" % (option, path, existing, reason))
+    return path
+
+
+# ---- input files -------------------------------------------------------------------------------------------
+
+
+def read_text(path, what: str = "file", max_bytes: int = MAX_TEXT_BYTES) -> str:
+    """A UTF-8 text file, or ForaNavError naming it: missing, a folder, unreadable, too big, not UTF-8."""
+    path = Path(path)
+    try:
+        if path.is_dir():
+            raise ForaNavError("%s: is a folder, expected a %s" % (path, what))
+        with open(path, "rb") as handle:
+            data = handle.read(max_bytes + 1)
+    except OSError as err:
+        raise ForaNavError("%s: cannot read %s: %s" % (path, what, err.strerror or err))
+    if len(data) > max_bytes:
+        raise ForaNavError("%s: %s larger than %d MiB" % (path, what, max_bytes // (1024 * 1024)))
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as err:
+        line = data[:err.start].count(b"\n") + 1
+        raise ForaNavError("%s: %s is not UTF-8 text (byte 0x%02x on line %d)" % (path, what, data[err.start], line))
+
+
+def read_json(path, what: str = "JSON file", **loads_kwargs):
+    """Decoded JSON of a UTF-8 file, or ForaNavError naming it (also for nesting too deep to decode)."""
+    text = read_text(path, what)
+    try:
+        return json.loads(text, **loads_kwargs)
+    except json.JSONDecodeError as err:
+        raise ForaNavError("%s: not valid JSON: %s (line %d)" % (path, err.msg, err.lineno))
+    except RecursionError:
+        raise ForaNavError("%s: JSON nested too deeply" % path)
+    except ValueError as err:  # e.g. an integer of more digits than int() converts
+        raise ForaNavError("%s: not valid JSON: %s" % (path, err))

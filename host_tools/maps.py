@@ -20,7 +20,6 @@ species is the target species and the tree lies within ``COLUMN_RULE_FACTOR`` x 
 Bad files raise ForaNavError with one line naming the file and the field, e.g.
 ``maps/x.json: trees[2].crown_m: must be a positive number``.
 """
-import json
 import math
 from dataclasses import dataclass, field, asdict
 from pathlib import Path
@@ -32,6 +31,8 @@ SPECIES = ("oil_palm", "coconut", "date_palm", "citrus", "olive")
 OBJECT_KINDS = ("roof", "road_cross")
 COLUMN_RULE_FACTOR = 1.5  # paper: trees farther than 1.5 crown sizes from the path are outside the column
 BUILTIN_DIR = Path(__file__).resolve().parent / "data" / "maps"
+MAX_SEED = 2 ** 32 - 1  # numpy's RandomState takes seeds up to this
+MAX_INTEGER_NUMBER = 10 ** 15  # an integer beyond this in a map is a typo (and beyond 1e308 float() fails)
 
 
 @dataclass(frozen=True)
@@ -108,6 +109,8 @@ class _Checker:
         value = obj[key]
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             self.fail(where + key, "must be a number, got %s" % type(value).__name__)
+        if isinstance(value, int) and abs(value) > MAX_INTEGER_NUMBER:
+            self.fail(where + key, "number too large")
         if not math.isfinite(value):
             self.fail(where + key, "must be finite, got %r" % value)
         if positive and value <= 0:
@@ -158,6 +161,8 @@ def map_from_dict(data, source="<map>"):
     altitude = c.number(data, "altitude_m", "", positive=True)
     target_species = c.string(data, "target_species", "", SPECIES) if "target_species" in data else "oil_palm"
     seed = c.integer(data, "seed", "") if "seed" in data else 0
+    if not 0 <= seed <= MAX_SEED:
+        c.fail("seed", "must be an integer from 0 to %d, got %d" % (MAX_SEED, seed))
 
     raw_wps = c.array(data, "waypoints", "")
     if len(raw_wps) < 2:
@@ -230,14 +235,7 @@ def resolve_map_path(name_or_path):
 def load_map(name_or_path):
     """Load and validate a map file (or a built-in map by name)."""
     path = resolve_map_path(name_or_path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as err:
-        raise ForaNavError("%s: cannot read map file: %s" % (path, err.strerror or err))
-    try:
-        data = json.loads(text, parse_constant=lambda c: float("nan"))
-    except json.JSONDecodeError as err:
-        raise ForaNavError("%s: not valid JSON: %s (line %d)" % (path, err.msg, err.lineno))
+    data = fileio.read_json(path, "map file", parse_constant=lambda c: float("nan"))
     return map_from_dict(data, str(path))
 
 

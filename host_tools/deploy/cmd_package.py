@@ -30,6 +30,7 @@ def run(args):
     out = Path(args.out)
     if out.suffix != package.PACKAGE_SUFFIX:
         raise ForaNavError("--out %s: the camera only unpacks files ending in %s" % (out, package.PACKAGE_SUFFIX))
+    fileio.check_output_file(out)
     mode = parse_mode(args.mode)
     vendor = module_files.check_name("vendor", args.vendor)
     folder = args.module_dir or module_files.default_module_folder()

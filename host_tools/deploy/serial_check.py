@@ -16,11 +16,13 @@ import math
 import sys
 import time
 
+from host_tools import argtypes
 from host_tools.deploy.modes import DEFAULT_MODE_TEXT, format_fps, parse_mode
 from host_tools.errors import ForaNavError
 from jevois_module.ForaNavTrees.foranav_serial import FRAME_STOP, FrameMark, LineAssembler, parse_line
 
 DEFAULT_SECONDS = 10.0
+MAX_SECONDS = 3600.0  # an hour of listening; longer is a typo (and inf would never return)
 READ_TIMEOUT_S = 0.1
 # A module keeping up delivers the camera rate up to timing jitter; below this share it is dropping frames.
 KEEPS_UP_SHARE = 0.95
@@ -101,7 +103,8 @@ def listen(port_url, seconds, baudrate=115200, clock=time.monotonic):
 
 def add_arguments(parser):
     parser.add_argument("port", help="serial port of the USB-serial adapter (e.g. /dev/ttyUSB0, COM3)")
-    parser.add_argument("--seconds", type=float, default=DEFAULT_SECONDS, help="how long to listen")
+    parser.add_argument("--seconds", type=argtypes.float_range(0.1, MAX_SECONDS), default=DEFAULT_SECONDS,
+                        help="how long to listen, 0.1-%g s (default %g)" % (MAX_SECONDS, DEFAULT_SECONDS))
     parser.add_argument("--mode", default=DEFAULT_MODE_TEXT, help="the deployed mode (default %(default)s)")
 
 

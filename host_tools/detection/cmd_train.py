@@ -30,6 +30,7 @@ def add_arguments(parser):
 
 
 def run(args):
+    fileio.check_output_file(args.out)  # before the training run, not after it
     single_threaded()
     try:
         windows = tuple(int(w) for w in args.windows.split(","))

@@ -23,49 +23,59 @@ Examples:
   foranav fly --map map3 --camera oracle --hide-tree 6 --hide-s 5 --mavlink udpout:127.0.0.1:14550
 """
 import json
+import math
 import sys
 import time
 from pathlib import Path
 
+from host_tools import argtypes, fileio
 from host_tools.errors import ForaNavError
 
 CAMERA_CHOICES = ("oracle", "sim")
 PROGRESS_EVERY_S = 5.0  # wall-clock seconds between progress lines on stderr
+# Below 2 fps frames come further apart than the app's link watch allows (app.linkHoldMs, 1000 ms)
+FPS_RANGE = (2.0, 120.0)
+LATENCY_MAX_MS = 5000  # app.camLatency is a uint16 and a latency of seconds already means a broken camera
 
 
 def add_arguments(parser):
     parser.add_argument("--map", required=True, help="built-in map name (map1, map2, map3) or map file")
     parser.add_argument("--camera", choices=CAMERA_CHOICES, default="sim",
                         help="sim (default): rendered frames + the JeVois module; oracle: ground-truth detector")
-    parser.add_argument("--seed", type=int, default=0, help="seed of every random choice (default 0)")
+    parser.add_argument("--seed", type=argtypes.seed, default=0, help="seed of every random choice (default 0)")
     parser.add_argument("--out", help="output folder (default runs/fly-<map>-seed<N>/)")
     parser.add_argument("--json", action="store_true", help="print the summary as one JSON object")
-    parser.add_argument("--dropout", type=float, default=0.0,
+    parser.add_argument("--dropout", type=argtypes.probability, default=0.0,
                         help="probability that a detection is lost on the way (default 0)")
     parser.add_argument("--hide-tree", type=int, help="hide this tree id from the camera ...")
-    parser.add_argument("--hide-s", type=float, default=5.0,
+    parser.add_argument("--hide-s", type=argtypes.nonnegative, default=5.0,
                         help="... for this many seconds from when the app first approaches it (default 5)")
-    parser.add_argument("--pixel-noise", type=float, default=None, help="oracle: pixel noise std (px)")
-    parser.add_argument("--latency-ms", type=int, default=None,
+    parser.add_argument("--pixel-noise", type=argtypes.float_range(0.0, 1000.0), default=None,
+                        help="oracle: pixel noise std (px)")
+    parser.add_argument("--latency-ms", type=argtypes.int_range(0, LATENCY_MAX_MS), default=None,
                         help="camera latency (ms; default sim: one frame, oracle: 50)")
-    parser.add_argument("--fps", type=float, default=None, help="sim: camera frame rate (default 9, the paper)")
+    parser.add_argument("--fps", type=argtypes.float_range(*FPS_RANGE), default=None,
+                        help="sim: camera frame rate, %g-%g (default 9, the paper)" % FPS_RANGE)
     parser.add_argument("--silence", action="append", default=[], metavar="START:DURATION",
                         help="fault: nothing reaches the wire from START for DURATION seconds (repeatable)")
-    parser.add_argument("--garbage-rate", type=float, default=0.0,
+    parser.add_argument("--garbage-rate", type=argtypes.probability, default=0.0,
                         help="fault: probability per frame of a garbage line on the wire")
-    parser.add_argument("--partial-rate", type=float, default=0.0,
+    parser.add_argument("--partial-rate", type=argtypes.probability, default=0.0,
                         help="fault: probability per frame that its bytes arrive in two pieces")
     parser.add_argument("--realtime", action="store_true",
                         help="camera and flight as two processes sharing only the pty, on the wall clock")
-    parser.add_argument("--speed", type=float, default=1.0, help="--realtime: wall-clock speed-up (default 1)")
-    parser.add_argument("--kill-camera-at", type=float, default=None, metavar="S",
+    parser.add_argument("--speed", type=argtypes.float_range(0.01, 100.0), default=1.0,
+                        help="--realtime: wall-clock speed-up (default 1)")
+    parser.add_argument("--kill-camera-at", type=argtypes.nonnegative, default=None, metavar="S",
                         help="--realtime fault: kill the camera process at S simulated seconds")
-    parser.add_argument("--cam-offset", type=float, nargs=2, metavar=("FWD", "LEFT"), default=None,
+    parser.add_argument("--cam-offset", type=argtypes.float_range(-1.0, 1.0), nargs=2, metavar=("FWD", "LEFT"),
+                        default=None, action=argtypes.Once,
                         help="camera mount offset from the MAV centre, body frame (m); sets the oracle's mount "
                              "and the app's app.camOffsetX/Y")
     parser.add_argument("--estimator", choices=("uwb", "flow"), default="uwb",
                         help="state estimate model: uwb (absolute, biased) or flow (drifting)")
-    parser.add_argument("--wind", type=float, default=0.0, help="wind gust acceleration std (m/s^2)")
+    parser.add_argument("--wind", type=argtypes.float_range(0.0, 20.0), default=0.0,
+                        help="wind gust acceleration std (m/s^2)")
     parser.add_argument("--mavlink", help="also stream the telemetry live, e.g. udpout:127.0.0.1:14550")
 
 
@@ -96,7 +106,7 @@ def _window(text):
         start, duration = (float(part) for part in text.split(":"))
     except ValueError:
         raise ForaNavError("--silence: expected START:DURATION in seconds, got %r" % text)
-    if start < 0 or duration <= 0:
+    if not (math.isfinite(start) and math.isfinite(duration)) or start < 0 or duration <= 0:
         raise ForaNavError("--silence: START must be >= 0 and DURATION > 0, got %r" % text)
     return (start, duration)
 
@@ -162,8 +172,12 @@ def run(args):
         raise ForaNavError("--kill-camera-at: only with --realtime (the camera is a process there)")
     if args.realtime and args.camera != "sim":
         raise ForaNavError("--realtime: only with --camera sim")
-    pmap = load_map(args.map)
     out = Path(args.out) if args.out else Path("runs") / ("fly-%s-seed%d" % (Path(args.map).stem, args.seed))
+    fileio.check_output_dir(out, "--out")
+    pmap = load_map(args.map)
+    if args.hide_tree is not None and args.hide_tree not in {tree.id for tree in pmap.trees}:
+        raise ForaNavError("--hide-tree: map %s has no tree %d (its trees: %s)" % (
+            args.map, args.hide_tree, ", ".join(str(tree.id) for tree in pmap.trees)))
     kwargs = _camera_kwargs(args)
     if args.realtime:
         camera = None

@@ -17,6 +17,7 @@ import sys
 import time
 from pathlib import Path
 
+from host_tools import argtypes, fileio
 from host_tools.errors import ForaNavError
 
 
@@ -25,7 +26,8 @@ def add_arguments(parser):
     parser.add_argument("--json", action="store_true", help='print {"tests": [...]} (each the fly summary plus '
                         '"test" and "map") instead of the table')
     parser.add_argument("--tests", help="comma-separated test numbers to run (default: 1-9)")
-    parser.add_argument("--jobs", type=int, default=None, help="flights in parallel (default: one per CPU)")
+    parser.add_argument("--jobs", type=argtypes.int_range(1, 256), default=None,
+                        help="flights in parallel (default: one per CPU)")
 
 
 def _selected(text):
@@ -47,6 +49,7 @@ def run(args):
     from host_tools.flight import paper_tests
 
     tests = _selected(args.tests)
+    fileio.check_output_dir(args.out)
     if args.jobs is not None and args.jobs < 1:
         raise ForaNavError("--jobs: must be at least 1")
     started = time.monotonic()

@@ -13,13 +13,16 @@ Examples:
 import json
 import sys
 
+from host_tools import argtypes
 from host_tools.errors import ForaNavError
+
+LATENCY_MAX_MS = 5000  # as fly --latency-ms
 
 
 def add_arguments(parser):
     parser.add_argument("clip", help="clip folder (clip.avi + clip.json) or its clip.json")
     parser.add_argument("--map", help="map giving the path F, when the sidecar has none (or to override it)")
-    parser.add_argument("--latency-ms", type=int, default=None,
+    parser.add_argument("--latency-ms", type=argtypes.int_range(0, LATENCY_MAX_MS), default=None,
                         help="delay of the module's lines on the wire (default: one clip frame)")
     parser.add_argument("--json", action="store_true", help="print the full report (with per-frame rows and "
                         "setpoints) as one JSON object")
@@ -57,6 +60,7 @@ def run(args):
     from host_tools.sim.clip import read_clip
 
     clip = read_clip(args.clip)
+    clip.check_video()
     pmap = load_map(args.map) if args.map else None
     if args.latency_ms is not None and args.latency_ms < 0:
         raise ForaNavError("--latency-ms: must not be negative")

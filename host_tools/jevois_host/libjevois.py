@@ -6,7 +6,9 @@ Modelled on jevois/src/jevois/Core/PythonSupport.C (1.18+). Semantics kept from 
   timed, then "<fps> fps, <cpu>% CPU" refreshed every ``interval`` frames; the periodic log line goes to
   the log stream.
 - ``Parameter(component, name, type, description, default, category)`` has ``get()``/``set()``; values are
-  checked against the type as the engine does.
+  checked against the type as the engine does. ``setCallback(cb)`` (as PythonParameter.H): ``cb(value)`` is
+  called once at once with the current value, then before every change; if it raises, the change is refused
+  and the old value stays (the engine then answers ``ERR ...``).
 - ``InputFrame.getCvBGR()/getCvGRAY()/getCvRGB()`` return copies; ``OutputFrame.sendCv(img)`` rescales to
   the output size (like the camera) and keeps the image.
 - ``LINFO/LERROR/LDEBUG`` log one string; ``LFATAL`` logs and raises.
@@ -150,6 +152,7 @@ class Parameter(object):
         self.component, self.name, self.type_str = component, str(name), type_str
         self.description, self.category = str(description), category
         self._value = self._convert(default)
+        self._callback = None
         registry = component.__dict__.setdefault("_jevois_host_parameters", {})
         if self.name in registry:
             raise ValueError("Parameter %s already exists" % self.name)
@@ -167,7 +170,14 @@ class Parameter(object):
         return self._value
 
     def set(self, value):
-        self._value = self._convert(value)
+        value = self._convert(value)
+        if self._callback is not None:
+            self._callback(value)  # raises to refuse the value
+        self._value = value
+
+    def setCallback(self, callback):
+        callback(self._value)
+        self._callback = callback
 
 
 def parameters(component):

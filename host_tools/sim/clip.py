@@ -26,7 +26,6 @@ The sidecar (``format`` "foranav-clip", ``version`` 1)::
 Real footage with a pose log uses the same sidecar: ``trees`` null (or the trees of a surveyed map), ``map``
 null or the surveyed map. Frame ``index`` i is the i-th decoded video frame; ``t_s`` is seconds from the start.
 """
-import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -81,6 +80,27 @@ class Clip:
                 yield image
         finally:
             capture.release()
+
+    def check_video(self):
+        """ForaNavError unless the video opens and holds at least one frame per sidecar record, of the camera's
+        size (a truncated or swapped video would otherwise replay part of the clip without a word)."""
+        capture = cv2.VideoCapture(str(self.video_path))
+        if not capture.isOpened():
+            raise ForaNavError("%s: cannot open video" % self.video_path)
+        try:
+            count = 0
+            ok, image = capture.read()
+            if ok and image.shape[1::-1] != (self.camera.width, self.camera.height):
+                raise ForaNavError("%s: frames are %dx%d, the sidecar's camera %dx%d" % (
+                    self.video_path, image.shape[1], image.shape[0], self.camera.width, self.camera.height))
+            while ok and count < len(self.frames):
+                count += 1
+                ok = capture.grab()
+        finally:
+            capture.release()
+        if count < len(self.frames):
+            raise ForaNavError("%s: %d frames, the sidecar has %d (truncated video?)"
+                               % (self.video_path, count, len(self.frames)))
 
     def __len__(self):
         return len(self.frames)
@@ -151,12 +171,7 @@ def read_clip(directory):
     directory = Path(directory)
     path = directory / SIDECAR_NAME if directory.is_dir() else directory
     directory = path.parent
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except OSError as err:
-        raise ForaNavError("%s: cannot read clip sidecar: %s" % (path, err.strerror or err))
-    except json.JSONDecodeError as err:
-        raise ForaNavError("%s: not valid JSON: %s (line %d)" % (path, err.msg, err.lineno))
+    data = fileio.read_json(path, "clip sidecar")
     return clip_from_dict(data, directory, str(path))
 
 
@@ -170,11 +185,14 @@ def clip_from_dict(data, directory, source_name="<clip>"):
         fail("version", "unsupported version %r (expected %d)" % (data.get("version"), VERSION))
     try:
         camera = CameraModel.from_dict(data["camera"])
-    except (KeyError, TypeError, ValueError) as err:
+    except (KeyError, IndexError, TypeError, ValueError, OverflowError) as err:
         fail("camera", "bad camera: %s" % err)
     fps = data.get("fps")
     if isinstance(fps, bool) or not isinstance(fps, (int, float)) or not fps > 0:
         fail("fps", "must be a positive number")
+    for key, kind in (("frames", list), ("source", dict), ("map", dict), ("video", str)):
+        if data.get(key) is not None and not isinstance(data[key], kind):
+            fail(key, "must be %s" % {list: "an array", dict: "an object", str: "a file name"}[kind])
     frames = []
     for i, rec in enumerate(data.get("frames") or []):
         try:
@@ -187,12 +205,15 @@ def clip_from_dict(data, directory, source_name="<clip>"):
                                       bool(o["complete"]), float(o.get("x", 0.0)), float(o.get("y", 0.0)))
                          for k, o in enumerate(rec.get("objects") or ()))
             frame = ClipFrame(int(rec["index"]), float(rec["t_s"]), pose, trees, objs)
-        except (KeyError, TypeError, ValueError) as err:
+        except (AttributeError, KeyError, TypeError, ValueError, OverflowError) as err:
             fail("frames[%d]" % i, "bad frame record (%s)" % (err,))
         if not all(math.isfinite(v) for v in (frame.t_s,) + tuple(frame.pose)):
             fail("frames[%d]" % i, "time and pose must be finite")
         if frame.index != i:
             fail("frames[%d].index" % i, "expected %d, got %d" % (i, frame.index))
+        if frames and not frame.t_s > frames[-1].t_s:
+            fail("frames[%d].t_s" % i, "time must increase from frame to frame (%g s after %g s)"
+                 % (frame.t_s, frames[-1].t_s))
         frames.append(frame)
     return Clip(Path(directory), str(data.get("video", VIDEO_NAME)), float(fps), camera, data.get("map"), frames,
                 dict(data.get("source") or {}))

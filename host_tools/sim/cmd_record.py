@@ -4,46 +4,52 @@ Example: foranav record --map map1 --out clips/map1 --speed 0.3 --fps 10
 The MAV holds yaw (default 0, as the paper's navigation app does) and altitude (default: the map's).
 The sidecar format is documented in host_tools/sim/clip.py and README.md (Clips).
 """
-import math
-
 import numpy as np
 
+from host_tools import argtypes, fileio
 from host_tools.errors import ForaNavError
 from host_tools.maps import load_map, map_to_dict
-from host_tools.sim.cli_args import EFFECT_PRESETS, add_camera_arguments, camera_from_args, positive
+from host_tools.sim.cli_args import ALTITUDE_M, EFFECT_PRESETS, add_camera_arguments, camera_from_args
 from host_tools.sim.clip import DEFAULT_QUALITY, write_clip
 from host_tools.sim.path import path_length, poses_along_path
 from host_tools.sim.world import World
+
+MAX_FPS = 120.0  # the fastest JeVois-A33 sensor mode
+MAX_FRAMES = 50000  # 1.5 hours at 9 fps: a longer clip is a typo (--speed 0.0001), not a recording
 
 
 def add_arguments(parser):
     parser.add_argument("--map", required=True, help="map file or built-in map name (map1, map2, map3)")
     parser.add_argument("--out", required=True, help="output folder (clip.avi + clip.json)")
-    parser.add_argument("--speed", type=float, default=0.3, help="ground speed, m/s (default 0.3)")
-    parser.add_argument("--fps", type=float, default=10.0, help="frames per second (default 10)")
-    parser.add_argument("--seed", type=int, default=None, help="world seed (default: the map's seed)")
-    parser.add_argument("--z", type=float, default=None, help="altitude, metres (default: the map's)")
-    parser.add_argument("--yaw", type=float, default=0.0, help="held yaw, degrees (default 0)")
-    parser.add_argument("--start", type=float, default=0.0, help="start this many metres along the path")
-    parser.add_argument("--duration", type=float, default=None, help="stop after this many seconds")
-    parser.add_argument("--quality", type=int, default=DEFAULT_QUALITY, help="MJPG quality 1-100 (default 75)")
+    parser.add_argument("--speed", type=argtypes.float_range(0.01, 10.0), default=0.3,
+                        help="ground speed, m/s, 0.01-10 (default 0.3)")
+    parser.add_argument("--fps", type=argtypes.float_range(0.1, MAX_FPS), default=10.0,
+                        help="frames per second, 0.1-%g (default 10)" % MAX_FPS)
+    parser.add_argument("--seed", type=argtypes.seed, default=None, help="world seed (default: the map's seed)")
+    parser.add_argument("--z", type=ALTITUDE_M, default=None, help="altitude, metres (default: the map's)")
+    parser.add_argument("--yaw", type=argtypes.finite, default=0.0, help="held yaw, degrees (default 0)")
+    parser.add_argument("--start", type=argtypes.nonnegative, default=0.0,
+                        help="start this many metres along the path")
+    parser.add_argument("--duration", type=argtypes.positive, default=None, help="stop after this many seconds")
+    parser.add_argument("--quality", type=argtypes.int_range(1, 100), default=DEFAULT_QUALITY,
+                        help="MJPG quality 1-100 (default 75)")
     add_camera_arguments(parser)
 
 
 def run(args):
+    fileio.check_output_dir(args.out)
     pmap = load_map(args.map)
     camera = camera_from_args(args)
-    positive("--speed", args.speed)
-    positive("--fps", args.fps)
-    z = positive("--z", args.z) if args.z is not None else pmap.altitude_m
+    z = args.z if args.z is not None else pmap.altitude_m
+    length = path_length(pmap.waypoints)
+    if not 0.0 <= args.start < length:
+        raise ForaNavError("--start: must be within the path (0 to %.2f m)" % length)
+    seconds = (length - args.start) / args.speed
     if args.duration is not None:
-        positive("--duration", args.duration)
-    if not 1 <= args.quality <= 100:
-        raise ForaNavError("--quality: must be 1-100, got %d" % args.quality)
-    if not math.isfinite(args.yaw):
-        raise ForaNavError("--yaw: must be finite")
-    if not 0.0 <= args.start < path_length(pmap.waypoints):
-        raise ForaNavError("--start: must be within the path (0 to %.2f m)" % path_length(pmap.waypoints))
+        seconds = min(seconds, args.duration)
+    if seconds * args.fps > MAX_FRAMES:
+        raise ForaNavError("--fps/--speed/--duration: %.0f frames, more than %d (a slower --fps, a faster --speed "
+                           "or a --duration)" % (seconds * args.fps, MAX_FRAMES))
     world = World.from_map(pmap, seed=args.seed)
     timed = poses_along_path(pmap.waypoints, args.speed, args.fps, z, args.yaw, args.duration, args.start)
     effects = EFFECT_PRESETS[args.effects]

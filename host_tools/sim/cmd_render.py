@@ -4,36 +4,32 @@ Example: foranav render --map map1 --x 1.86 --y 0.57 --out frame.png
 The altitude defaults to the map's flight height; --seed overrides the map's seed (ground and tree variation).
 Prints the trees in view (id, species, target, pixel centre and box size, complete or cut by the frame edge).
 """
-import math
-
 import cv2
 
-from host_tools import fileio
+from host_tools import argtypes, fileio
 from host_tools.errors import ForaNavError
 from host_tools.maps import load_map
 from host_tools.sim.camera import Pose
-from host_tools.sim.cli_args import EFFECT_PRESETS, add_camera_arguments, camera_from_args, positive
+from host_tools.sim.cli_args import ALTITUDE_M, EFFECT_PRESETS, add_camera_arguments, camera_from_args
 from host_tools.sim.world import World
 
 
 def add_arguments(parser):
     parser.add_argument("--map", required=True, help="map file or built-in map name (map1, map2, map3)")
-    parser.add_argument("--x", type=float, required=True, help="MAV x, metres (forward along the rows)")
-    parser.add_argument("--y", type=float, required=True, help="MAV y, metres (left)")
-    parser.add_argument("--z", type=float, default=None, help="height, metres (default: the map's altitude)")
-    parser.add_argument("--yaw", type=float, default=0.0, help="yaw, degrees counter-clockwise (default 0)")
-    parser.add_argument("--seed", type=int, default=None, help="world seed (default: the map's seed)")
+    parser.add_argument("--x", type=argtypes.finite, required=True, help="MAV x, metres (forward along the rows)")
+    parser.add_argument("--y", type=argtypes.finite, required=True, help="MAV y, metres (left)")
+    parser.add_argument("--z", type=ALTITUDE_M, default=None, help="height, metres (default: the map's altitude)")
+    parser.add_argument("--yaw", type=argtypes.finite, default=0.0, help="yaw, degrees counter-clockwise (default 0)")
+    parser.add_argument("--seed", type=argtypes.seed, default=None, help="world seed (default: the map's seed)")
     add_camera_arguments(parser)
     parser.add_argument("--out", required=True, help="output PNG")
 
 
 def run(args):
+    fileio.check_output_file(args.out)
     pmap = load_map(args.map)
     camera = camera_from_args(args)
-    z = positive("--z", args.z) if args.z is not None else pmap.altitude_m
-    for name in ("x", "y", "yaw"):
-        if not math.isfinite(getattr(args, name)):
-            raise ForaNavError("--%s: must be finite" % name)
+    z = args.z if args.z is not None else pmap.altitude_m
     world = World.from_map(pmap, seed=args.seed)
     frame = world.render(camera, Pose(args.x, args.y, z, args.yaw), effects=EFFECT_PRESETS[args.effects])
     write_png(args.out, frame.image)

@@ -10,7 +10,8 @@ Layout of DIR:
   frames/boxes.csv       image,x_center,y_center,width,height,label (host_tools/annotations.py): every
                          complete tree (label = species) and object (roof, road_cross); frames without any are
                          listed with an empty label
-Same seed, same bytes. --species selects the target species (default oil_palm).
+Same seed, same bytes. --species selects the target species (default oil_palm); several, given together or
+repeated (--species oil_palm --species olive = --species oil_palm olive), make all of them targets.
 """
 import csv
 import io
@@ -20,31 +21,32 @@ from pathlib import Path
 
 import cv2
 
-from host_tools import fileio
+from host_tools import argtypes, fileio
 from host_tools.annotations import Box, format_boxes
 from host_tools.errors import ForaNavError
 from host_tools.maps import SPECIES
 from host_tools.sim.dataset import generate
 
 CROPS_HEADER = ("image", "class", "category")
+MAX_COUNT = 100000  # crops or frames: beyond this a data set no longer fits a laptop's disk
+DEFAULT_SPECIES = ("oil_palm",)
 
 
 def add_arguments(parser):
     parser.add_argument("--out", required=True, help="output folder (created; existing crops/ and frames/ replaced)")
-    parser.add_argument("--count", type=int, required=True, help="positive crops (and as many negatives)")
-    parser.add_argument("--frames", type=int, default=None, help="annotated frames (default: --count)")
-    parser.add_argument("--seed", type=int, default=0, help="seed (default 0)")
-    parser.add_argument("--species", nargs="+", choices=SPECIES, default=["oil_palm"],
-                        help="target species (default oil_palm)")
+    parser.add_argument("--count", type=argtypes.int_range(1, MAX_COUNT), required=True,
+                        help="positive crops (and as many negatives)")
+    parser.add_argument("--frames", type=argtypes.int_range(0, MAX_COUNT), default=None,
+                        help="annotated frames (default: --count)")
+    parser.add_argument("--seed", type=argtypes.seed, default=0, help="seed (default 0)")
+    parser.add_argument("--species", nargs="+", action="extend", choices=SPECIES, default=None,
+                        help="target species, repeatable (default oil_palm)")
 
 
 def run(args):
-    if args.count < 1:
-        raise ForaNavError("--count: must be at least 1, got %d" % args.count)
+    fileio.check_output_dir(args.out)
     frame_count = args.count if args.frames is None else args.frames
-    if frame_count < 0:
-        raise ForaNavError("--frames: must not be negative")
-    species = tuple(dict.fromkeys(args.species))
+    species = tuple(dict.fromkeys(args.species or DEFAULT_SPECIES))
     positives, negatives, frames = generate(args.seed, args.count, frame_count, species)
     try:
         write_into(Path(args.out), positives, negatives, frames)

@@ -1,3 +1,4 @@
+import math
 import os
 
 import cv2
@@ -12,6 +13,11 @@ FRAMEMARKS = ("Stop", "None")
 SPECIES_FILES = {"oil_palm": "foranav_oil_palm.npz", "citrus": "foranav_citrus.npz", "olive": "foranav_olive.npz"}
 BOX_COLOUR = (0, 255, 0)  # BGR
 TEXT_COLOUR = (255, 255, 255)
+MIN_WINDOW_PX = 24  # the HOG window a window is downscaled to
+# Before the first frame the frame size is unknown: no window can exceed the shorter side of the largest
+# JeVois-A33 sensor mode (1280x1024). Once frames arrive, windows must fit the frame itself.
+MAX_FRAME_SIDE_PX = 1024
+MAX_TREES_LIMIT = 100  # far above what a frame holds or the serial port carries; a sanity bound
 
 
 ## Detect oil palm (or citrus, olive) trees with the ForaNav enhanced hierarchical HOG detector
@@ -28,10 +34,13 @@ TEXT_COLOUR = (255, 255, 255)
 #   T2 x y                     (serstyle Terse, default) or
 #   N2 <species> x y w h       (serstyle Normal)
 #   MARK STOP                  end of frame (framemark Stop, default), sent even when no tree is seen so that
-#                              a receiver can tell "frame done, nothing seen" from "link silent".
+#                              a receiver can tell "frame done, nothing seen" from "link silent", and even
+#                              when the frame could not be processed (the error is logged once per cause).
 #
 # Settings are jevois Parameters (setpar/getpar, params.cfg) and the same at the console through
-# "foranav <name> [<value>]" (see supportedCommands). Model files foranav_<species>.npz sit next to this file.
+# "foranav <name> [<value>]" (see supportedCommands). Every setting is checked on the way in (a Parameter
+# callback, so setpar and params.cfg alike): a value that would break the frames is refused with an error,
+# and the old value stays. Model files foranav_<species>.npz sit next to this file.
 #
 # Needs JeVois >= 1.18 (init() and jevois.Parameter); Python 3.7, numpy 1.16 and OpenCV 4 only.
 #
@@ -54,6 +63,8 @@ class ForaNavTrees:
         self.detector = None
         self.loaded = (None, None)  # (species, settings key) the detector was built for
         self.params = {}
+        self.frameSize = None  # (width, height) of the last frame: windows must fit it
+        self.lastError = None  # the last frame error logged, so that a failing frame logs once, not at 15 fps
 
     # ###################################################################################################
     ## Create the parameters and load the default model
@@ -80,6 +91,17 @@ class ForaNavTrees:
         self.addParam(pc, "serstyle", "str", "Serial message per tree: Terse (T2 x y) or Normal "
                       "(N2 species x y w h)", "Terse")
         self.addParam(pc, "framemark", "str", "End-of-frame message: Stop (MARK STOP) or None", "Stop")
+        for name in self.params:
+            if hasattr(self.params[name], "setCallback"):
+                self.params[name].setCallback(self.settingCheck(name))
+
+    ## A Parameter callback: raise (the engine's "ERR ...") for a value that would break the frames
+    def settingCheck(self, name):
+        def check(value):
+            error = checkSetting(name, str(value), self.frameSize) or self.checkSpecies(name, str(value))
+            if error:
+                raise ValueError(error)
+        return check
 
     def addParam(self, category, name, kind, description, default):
         self.params[name] = jevois.Parameter(self, name, kind, description, default, category)
@@ -110,7 +132,13 @@ class ForaNavTrees:
     ## Detect and send one serial line per tree, then the end-of-frame mark
     def detectAndSend(self, img):
         height, width = img.shape[0], img.shape[1]
-        trees = self.currentDetector().detect(img)
+        self.frameSize = (width, height)
+        try:
+            trees = self.currentDetector().detect(img)
+            self.lastError = None
+        except Exception as err:  # the engine keeps running: the frame still ends with its mark
+            trees = []
+            self.logFrameError(err)
         normal = self.params["serstyle"].get() == "Normal"
         for tree in trees:
             if normal:
@@ -121,6 +149,12 @@ class ForaNavTrees:
         if self.params["framemark"].get() == "Stop":
             jevois.sendSerial(foranav_serial.FRAME_STOP)
         return trees
+
+    def logFrameError(self, err):
+        message = "ForaNavTrees: frame not processed: %s" % err
+        if message != self.lastError:
+            jevois.LERROR(message)
+            self.lastError = message
 
     # ###################################################################################################
     ## Process function with no USB output (flight)
@@ -162,11 +196,14 @@ class ForaNavTrees:
             return "ERR Unknown setting %s (one of: %s)" % (name, ", ".join(sorted(self.params)))
         if len(words) == 2:
             return "%s=%s" % (name, self.params[name].get())
-        error = checkSetting(name, words[2]) or self.checkSpecies(name, words[2])
+        error = checkSetting(name, words[2], self.frameSize) or self.checkSpecies(name, words[2])
         if error:
             return "ERR " + error
         current = self.params[name].get()
-        self.params[name].set(type(current)(words[2]))
+        try:
+            self.params[name].set(type(current)(words[2]))
+        except ValueError as err:
+            return "ERR %s" % err
         return ""
 
     def checkSpecies(self, name, value):
@@ -183,9 +220,14 @@ class ForaNavTrees:
 
 
 def parseThreshold(text):
-    """'auto' -> None (the model's threshold); '0.5' -> 0.5."""
+    """'auto' -> None (the model's threshold); '0.5' -> 0.5; ValueError for nan or inf."""
     text = text.strip()
-    return None if text in ("", "auto") else float(text)
+    if text in ("", "auto"):
+        return None
+    value = float(text)
+    if math.isnan(value) or math.isinf(value):
+        raise ValueError("not a finite number: %s" % text)
+    return value
 
 
 def parseEdgeThreshold(text):
@@ -204,25 +246,39 @@ def parseWindows(text):
     return tuple(float(part) for part in text.split(","))
 
 
-def checkSetting(name, value):
-    """'' when value is acceptable for the named setting, otherwise the reason."""
+def checkSetting(name, value, frameSize=None):
+    """'' when value is acceptable for the named setting, otherwise the reason.
+
+    frameSize (width, height): the frame windows must fit (None: not known yet, any sensor mode)."""
     try:
         if name in ("svmthresh", "varthresh", "hsthresh"):
             parseThreshold(value)
         elif name == "edgethresh":
             parseEdgeThreshold(value)
-        elif name in ("step", "maxtrees"):
-            number = int(value)
-            if number < 1 or (name == "step" and number > 24):
-                return "%s out of range" % name
+        elif name == "step":
+            if not 1 <= int(value) <= MIN_WINDOW_PX:
+                return "step out of range (1 to %d)" % MIN_WINDOW_PX
+        elif name == "maxtrees":
+            if not 1 <= int(value) <= MAX_TREES_LIMIT:
+                return "maxtrees out of range (1 to %d)" % MAX_TREES_LIMIT
         elif name == "windows":
-            windows = parseWindows(value)
-            if windows is not None and min(windows) < 24:
-                return "windows must be at least 24 px"
+            return checkWindows(parseWindows(value), frameSize)
         elif name == "serstyle" and value not in SERSTYLES:
             return "serstyle must be one of %s" % ", ".join(SERSTYLES)
         elif name == "framemark" and value not in FRAMEMARKS:
             return "framemark must be one of %s" % ", ".join(FRAMEMARKS)
     except ValueError:
         return "bad value for %s: %s" % (name, value)
+    return ""
+
+
+def checkWindows(windows, frameSize):
+    if windows is None:
+        return ""
+    if not all(MIN_WINDOW_PX <= w < float("inf") for w in windows):
+        return "windows must be at least %d px" % MIN_WINDOW_PX
+    largest = MAX_FRAME_SIDE_PX if frameSize is None else min(frameSize)
+    if max(windows) > largest:
+        where = "any sensor mode" if frameSize is None else "the %dx%d frame" % frameSize
+        return "windows of %g px do not fit %s (at most %d px)" % (max(windows), where, largest)
     return ""

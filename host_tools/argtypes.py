@@ -1,0 +1,96 @@
+"""argparse helpers shared by every command: range-checked numbers and options that may be given once.
+
+Each ``type=`` helper turns the text into a value or raises ``argparse.ArgumentTypeError``; the parser then
+prints one line naming the option (``foranav fly: error: argument --wind: must be finite, got 'nan'``) and
+exits with status 2, before any work starts. Use them instead of ``type=float``/``type=int``, which accept
+``nan``, ``inf`` and values no command can use::
+
+    parser.add_argument("--fps", type=argtypes.float_range(0.5, 120.0), default=10.0)
+    parser.add_argument("--seed", type=argtypes.seed, default=0)
+    parser.add_argument("--mount-offset", type=argtypes.finite, nargs=2, action=argtypes.Once)
+"""
+import argparse
+import math
+from typing import Callable
+
+# numpy.random.RandomState (camera code, synthetic data) takes seeds 0 .. 2**32 - 1
+SEED_MAX = 2 ** 32 - 1
+
+
+def _number(text: str, kind: type) -> float:
+    try:
+        value = kind(text)
+    except (TypeError, ValueError):
+        raise argparse.ArgumentTypeError("expected %s, got %r" % ("an integer" if kind is int else "a number", text))
+    if kind is float and not math.isfinite(value):
+        raise argparse.ArgumentTypeError("must be finite, got %r" % text)
+    return value
+
+
+def finite(text: str) -> float:
+    """Any finite number (not nan, not inf)."""
+    return _number(text, float)
+
+
+def positive(text: str) -> float:
+    """A finite number > 0."""
+    value = finite(text)
+    if not value > 0:
+        raise argparse.ArgumentTypeError("must be positive, got %r" % text)
+    return value
+
+
+def nonnegative(text: str) -> float:
+    """A finite number >= 0."""
+    value = finite(text)
+    if value < 0:
+        raise argparse.ArgumentTypeError("must not be negative, got %r" % text)
+    return value
+
+
+def probability(text: str) -> float:
+    """A number in [0, 1]."""
+    return float_range(0.0, 1.0)(text)
+
+
+def float_range(low: float, high: float) -> Callable[[str], float]:
+    """A finite number in [low, high]."""
+    def parse(text):
+        value = finite(text)
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError("must be in [%g, %g], got %r" % (low, high, text))
+        return value
+    parse.__name__ = "number in [%g, %g]" % (low, high)
+    return parse
+
+
+def int_range(low: int, high: int) -> Callable[[str], int]:
+    """An integer in [low, high]."""
+    def parse(text):
+        value = _number(text, int)
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError("must be an integer in [%d, %d], got %r" % (low, high, text))
+        return value
+    parse.__name__ = "integer in [%d, %d]" % (low, high)
+    return parse
+
+
+def seed(text: str) -> int:
+    """A seed: an integer 0 .. 2**32 - 1 (what numpy's RandomState takes)."""
+    value = _number(text, int)
+    if not 0 <= value <= SEED_MAX:
+        raise argparse.ArgumentTypeError("must be an integer from 0 to %d, got %r" % (SEED_MAX, text))
+    return value
+
+
+class Once(argparse.Action):
+    """An option that may be given once: a repeated --mount-offset 1 2 --mount-offset 3 4 is refused instead
+    of silently keeping the last (for options whose values are one fixed-size group, e.g. nargs=2)."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        if getattr(namespace, "_given_once", None) is None:
+            namespace._given_once = set()
+        if self.dest in namespace._given_once:
+            parser.error("argument %s: given more than once" % option_string)
+        namespace._given_once.add(self.dest)
+        setattr(namespace, self.dest, values)

@@ -1,0 +1,410 @@
+"""Bad input never gives a traceback (issue #11, docs/errors.md): a table of bad inputs across every command.
+
+Each row runs `foranav <command> ...` in-process through host_tools.cli.main and checks: exit status 2; stderr
+exactly one line, naming the option or file; no traceback; nothing written or left half-written where the
+command writes (the scratch folder, holding pre-existing outputs, keeps every name and byte). A few rows run
+a real subprocess; a broken stdout pipe (`foranav train ... | head`) must not stop the work.
+"""
+import copy
+import json
+import os
+import random
+import shutil
+import struct
+import subprocess
+import sys
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+from host_tools import cli, fileio, images
+from host_tools.annotations import read_boxes
+from host_tools.errors import ForaNavError
+from host_tools.maps import map_from_dict
+from host_tools.sim.clip import clip_from_dict, read_clip
+
+FIXTURE_CLIP = Path(__file__).parent / "fixtures" / "clips" / "map3_short_sensor"
+OLD_BYTES = b"an output from an earlier run\n"
+CSV_HEADER = "image,x_center,y_center,width,height,label\n"
+FIELD_LIMIT = 128 * 1024  # csv.field_size_limit() default
+DEEP = 100000  # nesting levels: far beyond the interpreter's recursion limit
+
+
+def write_map(path, **changes):
+    data = json.loads((Path(cli.__file__).parent / "data" / "maps" / "map1.json").read_text())
+    data.update(changes)
+    path.write_text(json.dumps(data))
+
+
+@pytest.fixture(scope="module")
+def inputs(tmp_path_factory):
+    """Bad input files, made once."""
+    root = tmp_path_factory.mktemp("bad_inputs")
+    (root / "latin1.json").write_bytes(json.dumps({"name": "x"}).encode()[:-1] + b', "note": "caf\xe9"}')
+    (root / "deep.json").write_text("[" * DEEP + "]" * DEEP)
+    (root / "truncated.json").write_text('{"name": "map", "altitude_m": 1.2')
+    write_map(root / "nan_altitude.json", altitude_m=float("nan"))
+    write_map(root / "no_trees_field.json", trees="none")
+    write_map(root / "negative_seed.json", seed=-4)
+    text = (Path(cli.__file__).parent / "data" / "maps" / "map1.json").read_text()
+    (root / "big_int.json").write_text(text.replace('"altitude_m": 1.25', '"altitude_m": 1' + "0" * 400))
+    (root / "huge_int.json").write_text(text.replace('"altitude_m": 1.25', '"altitude_m": 1' + "0" * 5000))
+    (root / "folder.json").mkdir()
+    sidecar = json.loads((FIXTURE_CLIP / "clip.json").read_text())
+    sidecar["frames"][3]["t_s"] = sidecar["frames"][1]["t_s"]  # time running backwards
+    (root / "backwards").mkdir()
+    (root / "backwards" / "clip.json").write_text(json.dumps(sidecar))
+    (root / "latin1_clip").mkdir()
+    (root / "latin1_clip" / "clip.json").write_bytes(b'{"format": "foranav-clip", "name": "\xff"}')
+    (root / "deep_clip").mkdir()
+    (root / "deep_clip" / "clip.json").write_text('{"format": ' + "[" * DEEP + "]" * DEEP + "}")
+    (root / "cut_video").mkdir()
+    (root / "cut_video" / "clip.json").write_bytes((FIXTURE_CLIP / "clip.json").read_bytes())
+    video = (FIXTURE_CLIP / "clip.avi").read_bytes()
+    (root / "cut_video" / "clip.avi").write_bytes(video[:len(video) // 2])
+    (root / "frames_not_list").mkdir()
+    sidecar["frames"] = 7
+    (root / "frames_not_list" / "clip.json").write_text(json.dumps(sidecar))
+    (root / "big_field.csv").write_text(CSV_HEADER + "a.png,1,1,1,1," + "x" * (FIELD_LIMIT + 10) + "\n")
+    # a Latin-1 name far down a long CSV (past any reader's first buffer)
+    rows = "".join("f%04d.png,10,10,5,5,oil_palm\n" % i for i in range(600))
+    (root / "latin1.csv").write_bytes((CSV_HEADER + rows).encode() + b"caf\xe9.png,10,10,5,5,oil_palm\n")
+    return root
+
+
+def _make_read_only(folder):
+    """chmod 555; root ignores that, so also the immutable flag where the filesystem has it. True if it holds."""
+    folder.chmod(0o555)
+    if fileio.writable_reason(folder) and os.geteuid() != 0:
+        return True
+    if shutil.which("chattr"):
+        subprocess.run(["chattr", "+i", str(folder)], capture_output=True)
+    return bool(fileio.writable_reason(folder))
+
+
+def _release(folder):
+    if shutil.which("chattr"):
+        subprocess.run(["chattr", "-i", str(folder)], capture_output=True)
+    folder.chmod(0o755)
+
+
+@pytest.fixture(scope="module")
+def scratch(tmp_path_factory):
+    """The folder every row writes in (its working directory), with outputs of an earlier run."""
+    root = tmp_path_factory.mktemp("scratch")
+    for name in ("keep.png", "keep.npz", "keep.jvpkg", "afile"):
+        (root / name).write_bytes(OLD_BYTES)
+    (root / "existing_dir").mkdir()
+    (root / "existing_dir" / "old.txt").write_bytes(OLD_BYTES)
+    (root / "dir.jvpkg").mkdir()
+    (root / "ro").mkdir()
+    read_only = _make_read_only(root / "ro")
+    yield root, read_only
+    _release(root / "ro")
+
+
+def snapshot(root):
+    return {str(p.relative_to(root)): (p.read_bytes() if p.is_file() else None) for p in sorted(root.rglob("*"))}
+
+
+MAP_ROWS = [  # map inputs, the same for every command that reads a map
+    ("{in}/latin1.json", "latin1.json"), ("{in}/deep.json", "deep.json"), ("{in}/truncated.json", "truncated.json"),
+    ("{in}/nan_altitude.json", "altitude_m"), ("{in}/no_trees_field.json", "trees"),
+    ("{in}/folder.json", "folder.json"), ("no_such_map", "no_such_map"), ("{in}/negative_seed.json", "seed"),
+    ("{in}/big_int.json", "altitude_m"), ("{in}/huge_int.json", "huge_int.json")]
+RENDER = ["render", "--map", "map1", "--x", "1", "--y", "0"]
+RECORD = ["record", "--map", "map1"]
+FLY = ["fly", "--map", "map1", "--camera", "oracle"]
+CLIP = str(FIXTURE_CLIP)
+
+# (argv, what the one line must name); "{in}" is the inputs folder; paths without it are in the scratch folder
+CASES = [
+    # render
+    (RENDER[:4] + ["--x", "nan", "--y", "0", "--out", "keep.png"], "--x"),
+    (RENDER[:4] + ["--x", "inf", "--y", "0", "--out", "keep.png"], "--x"),
+    (RENDER + ["--yaw", "nan", "--out", "keep.png"], "--yaw"),
+    (RENDER + ["--z", "0", "--out", "keep.png"], "--z"),
+    (RENDER + ["--z", "-1", "--out", "keep.png"], "--z"),
+    (RENDER + ["--z", "1e9", "--out", "keep.png"], "--z"),
+    (RENDER + ["--seed", "-1", "--out", "keep.png"], "--seed"),
+    (RENDER + ["--mount-offset", "nan", "0", "--out", "keep.png"], "--mount-offset"),
+    (RENDER + ["--mount-offset", "0", "0", "--mount-offset", "0.1", "0", "--out", "keep.png"], "--mount-offset"),
+    (RENDER + ["--width", "100", "--height", "100", "--out", "keep.png"], "--width"),
+    (RENDER + ["--effects", "fog", "--out", "keep.png"], "--effects"),
+    (RENDER + ["--out", "afile/x.png"], "--out"),
+    (RENDER + ["--out", "no_dir/x.png"], "--out"),
+    (RENDER + ["--out", "existing_dir"], "--out"),
+    (RENDER + ["--out", "ro/x.png"], "--out"),
+    (RENDER[:4] + ["--y", "0", "--out", "keep.png"], "--x"),
+] + [(["render", "--map", path, "--x", "1", "--y", "0", "--out", "keep.png"], named) for path, named in MAP_ROWS] + [
+    # record
+    (RECORD + ["--out", "clip", "--fps", "1e9"], "--fps"),
+    (RECORD + ["--out", "clip", "--fps", "0"], "--fps"),
+    (RECORD + ["--out", "clip", "--fps", "nan"], "--fps"),
+    (RECORD + ["--out", "clip", "--speed", "0"], "--speed"),
+    (RECORD + ["--out", "clip", "--speed", "1e-9"], "--speed"),
+    (RECORD + ["--out", "clip", "--seed", "-1"], "--seed"),
+    (RECORD + ["--out", "clip", "--quality", "0"], "--quality"),
+    (RECORD + ["--out", "clip", "--duration", "-1"], "--duration"),
+    (RECORD + ["--out", "clip", "--start", "-1"], "--start"),
+    (RECORD + ["--out", "clip", "--start", "1000"], "--start"),
+    (RECORD + ["--out", "clip", "--z", "nan"], "--z"),
+    (RECORD + ["--out", "clip", "--fps", "100", "--speed", "0.01", "--duration", "10000"], "--fps"),
+    (RECORD + ["--out", "afile"], "--out"),
+    (RECORD + ["--out", "afile/clip"], "--out"),
+    (RECORD + ["--out", "ro"], "--out"),
+    (["record", "--map", "{in}/latin1.json", "--out", "clip"], "latin1.json"),
+    # synth
+    (["synth", "--out", "data", "--count", "0"], "--count"),
+    (["synth", "--out", "data", "--count", "1e3"], "--count"),
+    (["synth", "--out", "data", "--count", "5", "--frames", "-1"], "--frames"),
+    (["synth", "--out", "data", "--count", "5", "--seed", "-1"], "--seed"),
+    (["synth", "--out", "data", "--count", "5", "--species", "oil_palm", "--species", "pine"], "--species"),
+    (["synth", "--out", "afile", "--count", "5"], "--out"),
+    (["synth", "--out", "ro", "--count", "5"], "--out"),
+    # fly
+    (FLY + ["--latency-ms", "70000"], "--latency-ms"),
+    (["fly", "--map", "map1", "--fps", "0.01"], "--fps"),
+    (FLY + ["--seed", "-1"], "--seed"),
+    (FLY + ["--hide-tree", "999"], "--hide-tree"),
+    (FLY + ["--wind", "nan"], "--wind"),
+    (FLY + ["--pixel-noise", "inf"], "--pixel-noise"),
+    (FLY + ["--cam-offset", "nan", "0"], "--cam-offset"),
+    (FLY + ["--cam-offset", "0", "0", "--cam-offset", "0.1", "0"], "--cam-offset"),
+    (FLY + ["--dropout", "1.5"], "--dropout"),
+    (FLY + ["--garbage-rate", "inf"], "--garbage-rate"),
+    (FLY + ["--silence", "nan:5"], "--silence"),
+    (FLY + ["--silence", "5"], "--silence"),
+    (FLY + ["--speed", "0"], "--speed"),
+    (FLY + ["--out", "afile"], "--out"),
+    (FLY + ["--out", "ro"], "--out"),
+    (["fly", "--map", "map1", "--camera", "thermal"], "--camera"),
+    (["fly", "--map", "{in}/deep.json", "--camera", "oracle"], "deep.json"),
+    # paper-tests, demo
+    (["paper-tests", "--out", "afile"], "--out"),
+    (["paper-tests", "--jobs", "0", "--out", "paper"], "--jobs"),
+    (["paper-tests", "--tests", "42", "--out", "paper"], "--tests"),
+    (["demo", "--out", "afile"], "--out"),
+    (["demo", "--out", "ro"], "--out"),
+    (["demo", "--seed", "-1"], "--seed"),
+    # replay
+    (["replay", "{in}/backwards"], "t_s"),
+    (["replay", "{in}/latin1_clip"], "clip.json"),
+    (["replay", "{in}/deep_clip"], "clip.json"),
+    (["replay", "{in}/frames_not_list"], "frames"),
+    (["replay", "no_such_clip"], "no_such_clip"),
+    (["replay", "{in}/cut_video"], "clip.avi"),
+    (["replay", CLIP, "--latency-ms", "-1"], "--latency-ms"),
+    (["replay", CLIP, "--latency-ms", "70000"], "--latency-ms"),
+    (["replay", CLIP, "--map", "{in}/latin1.json"], "latin1.json"),
+    # bench, serial-check
+    (["bench", "sim", "--seed", "-1"], "--seed"),
+    (["bench", "gpu"], "target"),
+    (["serial-check", "/dev/null", "--seconds", "-1"], "--seconds"),
+    (["serial-check", "/dev/null", "--seconds", "inf"], "--seconds"),
+    (["serial-check", "/dev/null", "--seconds", "nan"], "--seconds"),
+    (["serial-check", "/dev/null", "--mode", "bogus"], "--mode"),
+    # detector commands: arguments and the CSVs they read
+    (["train", "--species", "oil_palm", "--data", "{in}/big_field.csv", "--out", "afile/m.npz"], "--out"),
+    (["train", "--species", "oil_palm", "--data", "{in}/big_field.csv", "--out", "existing_dir"], "--out"),
+    (["train", "--species", "oil_palm", "--data", "{in}/big_field.csv", "--out", "ro/m.npz"], "--out"),
+    (["train", "--species", "oil_palm", "--data", "{in}/big_field.csv", "--out", "keep.npz"], "big_field.csv"),
+    (["train", "--species", "oil_palm", "--data", "{in}/latin1.csv", "--out", "keep.npz"], "latin1.csv"),
+    (["train", "--species", "oil_palm", "--data", "{in}/big_field.csv", "--seed", "-1", "--out", "keep.npz"],
+     "--seed"),
+    (["evaluate", "--model", "oil_palm", "--data", "{in}/big_field.csv", "--seed", "-1"], "--seed"),
+    (["evaluate", "--model", "oil_palm", "--data", "{in}/big_field.csv"], "big_field.csv"),
+    (["detect", "--window", "10", "{in}/big_field.csv"], "--window"),
+    # package, deploy
+    (["package", "--out", "afile/x.jvpkg"], "--out"),
+    (["package", "--out", "dir.jvpkg"], "--out"),
+    (["package", "--out", "no_dir/x.jvpkg"], "--out"),
+    (["package", "--out", "keep.png"], "--out"),
+    (["deploy", "--sd", "no_such_card"], "--sd"),
+    # the command itself
+    (["nosuch"], "nosuch"),
+    ([], "command"),
+]
+
+
+def _case_id(case):
+    argv, named = case
+    return "-".join(a.replace("{in}/", "") for a in argv)[:60] or "no-command"
+
+
+def test_that_the_table_holds_at_least_60_bad_inputs_across_every_command():
+    commands = {argv[0] for argv, _ in CASES if argv and argv[0] in cli.COMMANDS}
+    assert len(CASES) >= 60
+    assert commands == set(cli.COMMANDS)
+
+
+@pytest.mark.timeout(60)  # a row that starts real work instead of refusing fails here, not after minutes
+@pytest.mark.parametrize("case", CASES, ids=[_case_id(c) for c in CASES])
+def test_that_bad_input_gives_one_line_naming_it_exit_2_and_writes_nothing(case, inputs, scratch, capsys,
+                                                                           monkeypatch):
+    # Fixture
+    argv, named = case
+    root, read_only = scratch
+    if "ro" in argv or any(a.startswith("ro/") for a in argv):
+        if not read_only:
+            pytest.skip("cannot make a read-only folder here")
+    monkeypatch.chdir(root)
+    argv = [a.replace("{in}", str(inputs)) for a in argv]
+    before = snapshot(root)
+    # Test
+    code = cli.main(argv)
+    # Assert
+    captured = capsys.readouterr()
+    lines = captured.err.splitlines()
+    assert code == 2, captured.err
+    assert len(lines) == 1, captured.err
+    assert named in lines[0]
+    assert "Traceback" not in captured.err and captured.out == ""
+    assert snapshot(root) == before
+
+
+def run_foranav(*args, **kwargs):
+    return subprocess.run([sys.executable, "-m", "host_tools.cli"] + [str(a) for a in args], text=True, **kwargs)
+
+
+def test_that_a_real_process_prints_one_line_and_exits_2(tmp_path, inputs):
+    # a real stderr: OpenCV's and FFmpeg's own warnings (missing image, damaged video) would show here
+    for args, named in ((RENDER + ["--x", "nan", "--out", tmp_path / "f.png"], "--x"),
+                        (["record", "--map", "map1", "--out", tmp_path / "c", "--fps", "1e9"], "--fps"),
+                        (["replay", inputs / "cut_video"], "clip.avi"),
+                        (["detect", tmp_path / "missing.png"], "missing.png")):
+        proc = run_foranav(*args, capture_output=True)
+        assert proc.returncode == 2
+        assert len(proc.stderr.splitlines()) == 1 and named in proc.stderr
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_that_a_reader_going_away_does_not_stop_training(tmp_path):
+    # Fixture: a tiny data set, and a stdout pipe whose reader is already gone (`| head` after it exited)
+    assert cli.main(["synth", "--out", str(tmp_path / "data"), "--count", "4", "--frames", "4", "--seed", "1"]) == 0
+    model = tmp_path / "m.npz"
+    read_end, write_end = os.pipe()
+    os.close(read_end)
+    # Test
+    try:
+        proc = run_foranav("train", "--species", "oil_palm", "--data", tmp_path / "data" / "frames" / "boxes.csv",
+                           "--out", model, stdout=write_end, stderr=subprocess.PIPE)
+    finally:
+        os.close(write_end)
+    # Assert
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stderr == ""
+    assert model.stat().st_size > 0
+
+
+def test_that_the_same_reader_going_away_inside_main_keeps_the_exit_status(tmp_path, monkeypatch):
+    class GonePipe(object):
+        def write(self, text):
+            raise BrokenPipeError(32, "Broken pipe")
+
+        def flush(self):
+            raise BrokenPipeError(32, "Broken pipe")
+
+    monkeypatch.setattr(sys, "stdout", GonePipe())
+    out = tmp_path / "frame.png"
+    assert cli.main(RENDER + ["--out", str(out)]) == 0  # prints the trees in view after writing
+    assert out.stat().st_size > 0
+
+
+def test_that_repeated_species_options_add_up(tmp_path, capsys):
+    for name, argv in (("joined", ["--species", "oil_palm", "olive"]),
+                       ("repeated", ["--species", "oil_palm", "--species", "olive"])):
+        assert cli.main(["synth", "--out", str(tmp_path / name), "--count", "2", "--frames", "0"] + argv) == 0
+        assert "(target oil_palm, olive)" in capsys.readouterr().out
+    assert (tmp_path / "joined" / "crops" / "crops.csv").read_bytes() == \
+        (tmp_path / "repeated" / "crops" / "crops.csv").read_bytes()
+
+
+def test_that_the_readers_name_the_file_for_every_way_it_can_be_bad(inputs):
+    for reader, path, named in ((read_boxes, inputs / "latin1.csv", "not UTF-8"),
+                                (read_boxes, inputs / "big_field.csv", "field larger"),
+                                (read_clip, inputs / "backwards", "t_s"),
+                                (read_clip, inputs / "deep_clip", "nested too deeply"),
+                                (fileio.read_json, inputs / "folder.json", "is a folder")):
+        with pytest.raises(ForaNavError, match=named) as caught:
+            reader(path)
+        assert path.name in str(caught.value) and "\n" not in str(caught.value)
+
+
+def test_that_output_checks_refuse_wrong_types_and_accept_new_folders(tmp_path):
+    (tmp_path / "afile").write_bytes(OLD_BYTES)
+    fileio.check_output_dir(tmp_path / "new" / "deeper")  # created later by the writer
+    fileio.check_output_file(tmp_path / "afile")  # replaced atomically later
+    for check, path in ((fileio.check_output_dir, tmp_path / "afile"),
+                        (fileio.check_output_dir, tmp_path / "afile" / "sub"),
+                        (fileio.check_output_file, tmp_path),
+                        (fileio.check_output_file, tmp_path / "missing" / "x.png"),
+                        (fileio.check_output_file, tmp_path / "afile" / "x.png")):
+        with pytest.raises(ForaNavError, match="--out"):
+            check(path)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["afile"]
+
+
+def test_that_images_claiming_huge_sizes_or_cut_short_are_refused_before_decoding(tmp_path):
+    # Fixture: a real frame as PNG and JPEG, then damaged copies
+    image = (np.random.RandomState(0).rand(288, 352, 3) * 255).astype(np.uint8)
+    png, jpeg = (cv2.imencode(ext, image)[1].tobytes() for ext in (".png", ".jpg"))
+    files = {"ok.png": png, "ok.jpg": jpeg, "cut.jpg": jpeg[:len(jpeg) // 2], "cut.png": png[:len(png) // 2],
+             "huge.png": png[:16] + struct.pack(">II", 30000, 30000) + png[24:], "text.png": b"not an image\n"}
+    for name, data in files.items():
+        (tmp_path / name).write_bytes(data)
+    # Test / Assert
+    assert images.read_image(tmp_path / "ok.png").shape == image.shape
+    assert images.read_image(tmp_path / "ok.jpg").shape == image.shape
+    for name, reason in (("cut.jpg", "truncated JPEG"), ("cut.png", "truncated PNG"), ("huge.png", "30000x30000"),
+                         ("text.png", "not an image"), ("missing.png", "cannot read")):
+        with pytest.raises(ForaNavError, match=reason) as caught:
+            images.read_image(tmp_path / name)
+        assert name in str(caught.value)
+
+
+FUZZ_VALUES = [None, "x", "", [], {}, -1, 0, 1e308, -1e308, 10 ** 20, True, [1, 2], [[1]], {"a": 1}, 3.5,
+               float("nan"), float("inf"), 2 ** 63, "oil_palm"]
+FUZZ_SAMPLES = 600
+
+
+def _json_paths(obj, prefix=()):
+    yield prefix
+    if isinstance(obj, dict):
+        for key, value in obj.items():
+            yield from _json_paths(value, prefix + (key,))
+    elif isinstance(obj, list):
+        for index, value in enumerate(obj[:3]):
+            yield from _json_paths(value, prefix + (index,))
+
+
+def _mutated(obj, rng):
+    """A copy of obj with one value replaced by a value of another type, or one field removed."""
+    obj = copy.deepcopy(obj)
+    path = rng.choice(list(_json_paths(obj))[1:])
+    target = obj
+    for key in path[:-1]:
+        target = target[key]
+    if isinstance(target, dict) and rng.random() < 0.2:
+        del target[path[-1]]
+    else:
+        target[path[-1]] = rng.choice(FUZZ_VALUES)
+    return obj
+
+
+def test_that_map_and_clip_validators_raise_only_foranav_errors_on_damaged_files():
+    rng = random.Random(11)
+    map_data = json.loads((Path(cli.__file__).parent / "data" / "maps" / "map1.json").read_text())
+    clip_data = json.loads((FIXTURE_CLIP / "clip.json").read_text())
+    refused = 0
+    for _ in range(FUZZ_SAMPLES):
+        for validate, data in ((lambda d: map_from_dict(d, "m.json"), map_data),
+                               (lambda d: clip_from_dict(d, FIXTURE_CLIP, "clip.json"), clip_data)):
+            try:
+                validate(_mutated(data, rng))
+            except ForaNavError as err:
+                refused += 1
+                assert "\n" not in str(err)
+    assert refused > FUZZ_SAMPLES  # most damage is caught, none of it as another exception
