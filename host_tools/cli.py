@@ -25,6 +25,7 @@ COMMANDS = {
     "detect": ("host_tools.detection.cmd_detect", "run the tree detector on images"),
     "train": ("host_tools.detection.cmd_train", "train a detector model from annotated CSVs"),
     "evaluate": ("host_tools.detection.cmd_evaluate", "evaluate a detector model (crop and frame level)"),
+    "split": ("host_tools.detection.cmd_split", "split annotated imagery by image into train and held-out CSVs"),
     "fly": ("host_tools.flight.cmd_fly", "fly a map with the Crazyflie app on the emulated firmware"),
     "paper-tests": ("host_tools.flight.cmd_paper_tests", "run the paper's flight Tests 1-9"),
     "replay": ("host_tools.flight.cmd_replay", "replay a recorded clip through both halves"),

@@ -104,3 +104,53 @@ def test_that_the_benchmark_reports_every_figure_the_issue_asks_for():
     assert {"median_ms", "p90_ms", "fps", "speedup_vs_reference"} <= set(figures)
     assert figures["median_ms"] > 0 and figures["speedup_vs_reference"] > 1
     assert result["peak_rss_mb"] > 0
+
+
+def crowded_scene(tmp_path, palms=14):
+    image, placed, _roofs = synthetic.scene(21, width=900, height=700, palms=palms, roofs=0, diameter=(85, 100))
+    path = tmp_path / "crowded.png"
+    cv2.imwrite(str(path), image)
+    return str(path), placed
+
+
+def test_that_detect_reports_every_tree_by_default_and_max_detections_caps(tmp_path, capsys):
+    path, placed = crowded_scene(tmp_path)
+    assert len(placed) > detector_core_default_cap()
+    assert main(["detect", path, "--crown-px", "92", "--json"]) == 0
+    every = json.loads(capsys.readouterr().out)["detections"]
+    assert len(every) > detector_core_default_cap()  # the camera's maxtrees is not a host limit
+    assert main(["detect", path, "--crown-px", "92", "--max-detections", "3", "--json"]) == 0
+    capped = json.loads(capsys.readouterr().out)["detections"]
+    assert capped == every[:3]
+
+
+def detector_core_default_cap():
+    import foranav_detector
+    return foranav_detector.DEFAULT_MAX_DETECTIONS
+
+
+def test_that_the_crown_size_sets_the_windows_and_gsd_with_crown_metres_is_the_same(tmp_path, capsys):
+    path, _placed = crowded_scene(tmp_path, palms=3)
+    model = common.load("oil_palm")
+    assert main(["detect", path, "--crown-px", "92", "--json"]) == 0
+    by_pixels = json.loads(capsys.readouterr().out)
+    assert by_pixels["windows"] == [round(92 * r) for r in model.crown_ratios]
+    assert main(["detect", path, "--gsd", "0.1", "--crown-m", "9.2", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out) == by_pixels
+
+
+def test_that_an_image_of_no_camera_size_without_a_scale_gets_a_one_line_warning(tmp_path, capsys):
+    path, _placed = crowded_scene(tmp_path, palms=2)
+    assert main(["detect", path]) == 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "warning" in err[0] and "--crown-px" in err[0]
+    assert main(["detect", path, "--crown-px", "90"]) == 0
+    assert capsys.readouterr().err == ""
+
+
+def test_that_an_unknown_domain_and_half_a_scale_are_one_error_line(tmp_path, capsys):
+    path, _placed = crowded_scene(tmp_path, palms=1)
+    assert main(["detect", path, "--domain", "nowhere"]) == 2
+    assert "no domain 'nowhere'" in one_error_line(capsys)
+    assert main(["detect", path, "--gsd", "0.1"]) == 2
+    assert "--crown-m" in one_error_line(capsys)

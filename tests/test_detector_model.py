@@ -65,12 +65,12 @@ def test_that_a_model_of_another_hog_configuration_is_refused():
 
 def test_that_missing_fields_and_non_models_are_refused():
     arrays = make_model().to_arrays()
-    del arrays["template_sat"]
-    with pytest.raises(foranav_model.ModelFormatError, match="missing template_sat"):
+    del arrays["colour_vectors"]
+    with pytest.raises(foranav_model.ModelFormatError, match="missing colour_vectors"):
         foranav_model.load_model(saved(arrays))
     with pytest.raises(foranav_model.ModelFormatError, match="not a ForaNav model"):
         foranav_model.load_model(saved({"x": np.zeros(3)}))
-    with pytest.raises(foranav_model.ModelFormatError, match="not a readable model"):
+    with pytest.raises(foranav_model.ModelFormatError, match="not an .npz archive"):
         foranav_model.load_model(io.BytesIO(b"not an npz"))
 
 
@@ -98,3 +98,72 @@ def test_that_the_shipped_models_use_npy_format_1_0_which_numpy_1_16_reads(speci
             with archive.open(name) as member:
                 assert np.lib.format.read_magic(member) == (1, 0), name
                 assert member.read(1)  # a header follows; no pickled objects
+
+
+def test_that_a_format_2_model_is_refused_naming_its_version():
+    arrays = make_model().to_arrays()
+    arrays["format_version"] = np.array(2, np.int32)
+    with pytest.raises(foranav_model.ModelFormatError, match="model format version 2, this detector reads version 3"):
+        foranav_model.load_model(saved(arrays))
+
+
+def test_that_several_imageries_round_trip_with_their_own_colour_models_and_thresholds():
+    rng = np.random.RandomState(1)
+    domains = [foranav_model.Domain(name, svm, 0.5 + svm, 0.001, rng.rand(2, 512), 0.0, rng.rand(512))
+               for name, svm in (("survey", -0.5), ("uav", 0.25))]
+    model = make_model(domains=domains, crown_ratios=(0.95, 1.1, 1.3), provenance="site A (CC-BY 4.0)")
+    loaded = foranav_model.load_model(saved(model))
+    assert [d.name for d in loaded.domains] == ["survey", "uav"]
+    assert loaded.domain("uav").svm_threshold == pytest.approx(0.25)
+    assert np.array_equal(loaded.domain("survey").colour_vectors, domains[0].colour_vectors.astype(np.float32))
+    assert loaded.crown_ratios == pytest.approx((0.95, 1.1, 1.3)) and loaded.provenance == "site A (CC-BY 4.0)"
+    with pytest.raises(foranav_model.ModelFormatError, match="no domain 'x'.*survey, uav"):
+        loaded.domain("x")
+
+
+def _damaged_files(tmp_path):
+    """{kind: path} of files that are not usable models, made from a good one."""
+    good = saved(make_model()).getvalue()
+    files = {"truncated": good[:4000], "empty": b"", "text": b"species = oil_palm\n",
+             "lfs pointer": b"version https://git-lfs.github.com/spec/v1\noid sha256:abc\nsize 8123\n"}
+    crc = bytearray(good)
+    position = good.index(b"svm_weights.npy") + 200  # inside the stored array's bytes
+    crc[position] ^= 0xFF
+    files["crc damaged"] = bytes(crc)
+    npy = io.BytesIO()
+    np.save(npy, np.zeros(3))
+    files["npy"] = npy.getvalue()
+    arrays = make_model().to_arrays()
+    arrays["svm_weights"] = np.array(["a"] * arrays["svm_weights"].size)
+    files["wrong field type"] = saved(arrays).getvalue()
+    arrays = make_model().to_arrays()
+    arrays["species"] = np.array(3.5)
+    files["wrong species type"] = saved(arrays).getvalue()
+    paths = {}
+    for kind, data in files.items():
+        paths[kind] = tmp_path / (kind.replace(" ", "_") + ".npz")
+        paths[kind].write_bytes(data)
+    return paths
+
+
+def test_that_damaged_model_files_give_one_line_that_never_suggests_unpickling(tmp_path):
+    for kind, path in _damaged_files(tmp_path).items():
+        with pytest.raises(foranav_model.ModelFormatError) as caught:
+            foranav_model.load_model(str(path))
+        message = str(caught.value)
+        assert str(path) in message and "\n" not in message, kind
+        assert "pickle" not in message.lower(), (kind, message)
+    assert "git lfs pull" in str(pytest.raises(foranav_model.ModelFormatError, foranav_model.load_model,
+                                                 str(tmp_path / "lfs_pointer.npz")).value)
+
+
+def test_that_detect_with_a_damaged_model_exits_2_with_one_line(tmp_path, capsys):
+    import cv2
+    from host_tools.cli import main
+    from host_tools.detection import synthetic
+    image = tmp_path / "frame.png"
+    cv2.imwrite(str(image), synthetic.scene(1)[0])
+    for kind, path in _damaged_files(tmp_path).items():
+        assert main(["detect", "--model", str(path), str(image)]) == 2, kind
+        err = capsys.readouterr().err.strip()
+        assert err.count("\n") == 0 and "Traceback" not in err and "pickle" not in err.lower(), (kind, err)

@@ -53,7 +53,7 @@ def test_that_the_edge_test_is_calibrated_to_the_best_frame_f1_of_its_candidates
     model = synthetic.small_model(seed=1, frames=40)
     frames = synthetic.annotated_frames(range(100, 112))
     messages = []
-    training._calibrate_edge(model, frames, messages.append)
+    training._calibrate_edge(model, [("default", frames)], messages.append)
     candidates = (model.svm_threshold,) + training.EDGE_THRESHOLDS
     assert model.edge_threshold in candidates and "edge test on 12 frames" in messages[0]
 

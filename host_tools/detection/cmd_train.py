@@ -1,32 +1,87 @@
 """Train a detector model from annotated CSVs (the shared boxes format; image paths relative to each CSV).
 
-Example: foranav train --species oil_palm --data runs/synth/frames/boxes.csv --seed 11 --out model.npz
-Boxes of the species wholly inside their frame are positives; other labels, windows cutting a tree and
-background windows are negatives; the window follows each box (crown x --margin). A linear SVM is trained
-with hard-negative mining; the colour template and the colour and variance thresholds come from the
-positives. Same data and seed, same model file.
+Example: foranav train --species oil_palm --data siteA/boxes.csv --data siteB/boxes.csv --seed 1 --out m.npz
+Each boxes CSV is one imagery (its folder name; --domain NAME=CSV names it): the model holds one shared SVM
+and, per imagery with trees of the species, a colour model and thresholds calibrated on its held-back
+frames. An imagery without the species adds negatives only. Boxes of the species wholly inside their frame
+are positives; other labels, windows cutting a tree and background windows are negatives; the window
+follows each box (crown x --margin). Survey imagery (frames not --reference-width wide) is mined for hard
+negatives at its own crown scale, only inside each image's annotated area. A training report (report.md
+and PNGs: the share of positives and look-alikes passing each cue, per imagery, with warnings) goes next
+to the model (--report). Same data and seed, same model file.
 """
+import os
+from pathlib import Path
+
 from host_tools import fileio
-from host_tools.detection import dataset, evaluation, training
+from host_tools.detection import dataset, evaluation, report, training
 from host_tools.detection.threads import single_threaded
 from host_tools.errors import ForaNavError
 
+import foranav_features as features
 import foranav_model
 
 
 def add_arguments(parser):
     parser.add_argument("--species", required=True, help="label of the target trees in the CSVs, e.g. oil_palm")
-    parser.add_argument("--data", nargs="+", required=True, metavar="CSV",
-                        help="boxes CSVs (frames), optionally also crops CSVs (image,class,category) of ready windows")
+    parser.add_argument("--data", nargs="+", action="extend", default=[], metavar="CSV",
+                        help="boxes CSVs (one imagery each; repeat or list several), optionally crops CSVs "
+                        "(image,class,category) of ready windows")
+    parser.add_argument("--domain", action="append", default=[], metavar="NAME=CSV",
+                        help="a boxes CSV as the imagery NAME (repeatable)")
     parser.add_argument("--seed", type=int, default=0, help="seed of every random choice (default 0)")
     parser.add_argument("--out", required=True, metavar="MODEL", help="model file to write (.npz)")
     parser.add_argument("--windows", default=",".join(str(w) for w in training.DEFAULT_WINDOW_SIZES),
-                        help="detection window sides in pixels at --reference-width (default %(default)s)")
+                        help="camera window sides in pixels at --reference-width (default %(default)s)")
     parser.add_argument("--reference-width", type=int, default=training.DEFAULT_REFERENCE_WIDTH,
                         help="frame width the window sizes refer to (default %(default)s: the flight camera)")
     parser.add_argument("--margin", type=float, default=training.DEFAULT_MARGIN,
-                        help="window side / crown size (default %(default)s)")
+                        help="training window side / crown size (default %(default)s)")
+    parser.add_argument("--colour", choices=features.COLOUR_KINDS, default="templates",
+                        help="colour model per imagery: templates (hue/saturation correlation) or linear "
+                        "(a classifier on the histograms); default %(default)s")
+    parser.add_argument("--colour-templates", type=int, default=1, metavar="K",
+                        help="templates per imagery (k-means of the crowns' histograms; default 1)")
+    parser.add_argument("--provenance", default="", metavar="TEXT",
+                        help="sources and licences of the imagery, stored in the model file")
+    parser.add_argument("--report", metavar="DIR", help="folder for report.md and its PNGs (default: MODEL "
+                        "without .npz + '_report'; 'none': no report)")
     parser.add_argument("--quiet", action="store_true", help="print only the summary line")
+
+
+def imageries_from(args):
+    """[(name, csv path)]: every boxes CSV once, named by --domain or by its folder (made unique)."""
+    named = []
+    for item in args.domain:
+        name, sep, path = item.partition("=")
+        if not sep or not name or len(name.split()) != 1 or not path:
+            raise ForaNavError("--domain must be NAME=CSV with a one-word NAME, got %r" % item)
+        named.append((name, path))
+    for path in args.data:
+        if not evaluation.is_crops_csv(path):
+            base = Path(path).resolve().parent.name or "imagery"
+            name, n = base, 2
+            while name in [existing for existing, _p in named]:
+                name, n = "%s_%d" % (base, n), n + 1
+            named.append((name, path))
+    names = [name for name, _p in named]
+    if len(set(names)) != len(names):
+        raise ForaNavError("--domain: imagery names must be unique (%s)" % ", ".join(names))
+    if not named:
+        raise ForaNavError("--data: no boxes CSV given (crops CSVs alone cannot train a model)")
+    return named
+
+
+def check_out(path):
+    """Fail before the work when the model cannot be written there."""
+    folder = Path(path).resolve().parent
+    if Path(path).is_dir():
+        raise ForaNavError("--out %s: is a folder, give a file name" % path)
+    existing = folder
+    while not existing.exists():
+        existing = existing.parent
+    if not existing.is_dir() or not os.access(str(existing), os.W_OK):
+        raise ForaNavError("--out %s: cannot write in %s" % (path, existing))
 
 
 def run(args):
@@ -36,22 +91,38 @@ def run(args):
         windows = tuple(int(w) for w in args.windows.split(","))
     except ValueError:
         raise ForaNavError("--windows must be comma-separated integers")
-    if min(windows) < 24 or args.margin <= 0 or args.reference_width <= 0:
+    if min(windows) < 24 or not args.margin > 0 or args.reference_width <= 0:
         raise ForaNavError("--windows must be >= 24 px, --margin and --reference-width positive")
+    if not 1 <= args.colour_templates <= 16:
+        raise ForaNavError("--colour-templates must be 1..16")
+    if not args.data and not args.domain:
+        raise ForaNavError("--data or --domain: give at least one boxes CSV")
+    check_out(args.out)
+    named = imageries_from(args)
     crop_csvs = [p for p in args.data if evaluation.is_crops_csv(p)]
-    frames = dataset.load_frames([p for p in args.data if p not in crop_csvs])
+    imageries = [training.Imagery(name, dataset.load_frames([path]), str(path)) for name, path in named]
     crops = [(dataset.read_image(path), positive) for csv_path in crop_csvs
              for path, positive, _category in evaluation.read_crops(csv_path)]
-    log = (lambda message: None) if args.quiet else (lambda message: print("train: " + message))
+    log = (lambda message: None) if args.quiet else (lambda message: print("train: " + message, flush=True))
     try:
-        model = training.train(frames, args.species, seed=args.seed, window_sizes=windows,
-                               reference_width=args.reference_width, margin=args.margin, log=log, crops=crops)
+        model = training.train(imageries, args.species, seed=args.seed, window_sizes=windows,
+                               reference_width=args.reference_width, margin=args.margin, log=log, crops=crops,
+                               colour_kind=args.colour, colour_templates=args.colour_templates,
+                               provenance=args.provenance)
     except ValueError as err:
         raise ForaNavError(str(err))
     with fileio.atomic_path(args.out) as tmp:
         with open(str(tmp), "wb") as handle:
             foranav_model.save_model(model, handle)
-    print("wrote %s: %s, svm bias %.3f, thresholds svm %.2f var %.4g hs %.3f edge %.2f"
-          % (args.out, model.notes, model.svm_bias, model.svm_threshold, model.variance_threshold,
-             model.hs_threshold, model.edge_threshold))
+    report_dir = args.report or str(Path(args.out).with_suffix("")) + "_report"
+    if report_dir != "none":
+        written = report.write_report(model, imageries, report_dir, seed=args.seed)
+        for warning in written["warnings"]:
+            print("train: warning: " + warning)
+        log("report: %s" % written["path"])
+    thresholds = "; ".join("%s svm %.2f colour %.3f var %.4g" % (d.name, d.svm_threshold, d.hs_threshold,
+                                                                d.variance_threshold) for d in model.domains)
+    print("wrote %s: %s, svm bias %.3f, edge %.2f, crown ratios %s; %s"
+          % (args.out, model.notes, model.svm_bias, model.edge_threshold,
+             ",".join("%.2f" % r for r in model.crown_ratios), thresholds))
     return 0

@@ -51,6 +51,27 @@ class Frame:
     def window_fits(self, cx, cy, side):
         return side / 2.0 <= cx <= self.width - side / 2.0 and side / 2.0 <= cy <= self.height - side / 2.0
 
+    def typical_crown(self):
+        """Median crown size (px) of the frame's labelled boxes (0 without any): what a user gives as --crown-px."""
+        sizes = [crown_size(b) for b in self.boxes if b.label]
+        return float(np.median(sizes)) if sizes else 0.0
+
+    def annotated_area(self):
+        """The convex hull (float32 polygon) of the labelled boxes grown by half a typical crown, or None.
+
+        Survey sites often annotate one block: what lies outside the hull is neither tree nor background."""
+        if not hasattr(self, "_area"):
+            grow = 0.5 * self.typical_crown()
+            corners = [(x, y) for b in self.boxes if b.label
+                       for x in (b.x_center - b.width / 2 - grow, b.x_center + b.width / 2 + grow)
+                       for y in (b.y_center - b.height / 2 - grow, b.y_center + b.height / 2 + grow)]
+            self._area = cv2.convexHull(np.array(corners, np.float32)) if corners else None
+        return self._area
+
+    def in_area(self, x, y):
+        area = self.annotated_area()
+        return area is not None and cv2.pointPolygonTest(area, (float(x), float(y)), False) >= 0
+
 
 def read_image(path):
     image = cv2.imread(str(path), cv2.IMREAD_COLOR)
@@ -87,6 +108,17 @@ def is_tree_window(frame, species, cx, cy, side, margin, centre_tolerance=0.25, 
     return False
 
 
+def tree_window_mask(frame, species, cx, cy, side, margin, centre_tolerance=0.25, size_tolerance=1.4):
+    """is_tree_window for arrays of window centres cx, cy (one side): a boolean array."""
+    cx, cy = np.asarray(cx, np.float64), np.asarray(cy, np.float64)
+    out = np.zeros(cx.shape, bool)
+    for box in frame.trees(species):
+        expected = crown_size(box) * margin
+        if 1.0 / size_tolerance <= side / expected <= size_tolerance:
+            out |= np.hypot(box.x_center - cx, box.y_center - cy) <= centre_tolerance * side
+    return out
+
+
 def near_any_tree(frame, cx, cy, side):
     """Is a tree (any label, complete or not) centred inside this window? (not usable as background)"""
     half = side / 2.0
@@ -112,11 +144,3 @@ def pixel_window(frame, cx, cy, side):
     x0 = max(0, min(frame.width - side, x0))
     y0 = max(0, min(frame.height - side, y0))
     return slice(y0, y0 + side), slice(x0, x0 + side)
-
-
-def window_cues(frame, cx, cy, side, model):
-    """(hue/saturation similarity, bottom-layer HOG variance) of a window."""
-    rows, cols = pixel_window(frame, cx, cy, side)
-    similarity = features.hs_similarity(frame.hsv[rows, cols], model.template_hue, model.template_sat)
-    variance = features.hog_texture(frame.value[rows, cols])
-    return similarity, variance

@@ -28,22 +28,42 @@ import foranav_features as features
 CROPS_HEADER = ("image", "class", "category")
 
 
-def classify_window(model, value, hsv, settings=None, small=None):
-    """(is_tree, svm score, hs similarity, variance) of one window given as full-resolution value and HSV
-    (and optionally its top-layer input with context, see foranav_features.window_with_context)."""
-    settings = settings or detector_core.DetectorSettings()
-
-    def threshold(name):
-        value = getattr(settings, name)
-        return float(getattr(model, name) if value is None else value)
-
+def window_cues(model, domain_index, value, hsv, small=None):
+    """(svm score, colour score, texture) of one window given as full-resolution value and HSV (and optionally
+    its top-layer input with context, see foranav_features.window_with_context), against one domain."""
     small = _downscale_crop(value) if small is None else small
     score = model.score(features.top_layer_hog(small))
-    similarity = features.hs_similarity(hsv, model.template_hue, model.template_sat)
-    variance = features.hog_texture(value)
-    is_tree = (score > threshold("svm_threshold") and similarity > threshold("hs_threshold")
-               and variance > threshold("variance_threshold"))
-    return is_tree, score, similarity, variance
+    domain = model.domains[domain_index]
+    prepared = features.prepare_colour_vectors(model.colour_kind, domain.colour_vectors)
+    colour = features.colour_score(model.colour_kind, prepared, domain.colour_bias, *features.smoothed_hs(hsv))
+    return score, colour, features.hog_texture(value)
+
+
+def frame_window_cues(model, domain_index, frame, cx, cy, side):
+    """window_cues of the window (centre cx, cy; side) of an annotated frame."""
+    rows, cols = dataset.pixel_window(frame, cx, cy, side)
+    small = features.window_with_context(frame.value, cx - side / 2.0, cy - side / 2.0, side)
+    return window_cues(model, domain_index, frame.value[rows, cols], frame.hsv[rows, cols], small)
+
+
+def passes(model, domain_index, cues, settings=None):
+    """Does a window with these cues pass all three tests of the domain (settings override thresholds)?"""
+    detector = detector_core.TreeDetector(model, settings)
+    detector.domain_index = domain_index
+    score, colour, texture = cues
+    return (score > detector.threshold("svm_threshold") and colour > detector.threshold("hs_threshold")
+            and texture > detector.threshold("variance_threshold"))
+
+
+def classify_window(model, value, hsv, settings=None, small=None, domain_index=0):
+    """(is_tree, svm score, colour score, texture) of one window (see window_cues)."""
+    cues = window_cues(model, domain_index, value, hsv, small)
+    return (passes(model, domain_index, cues, settings),) + tuple(cues)
+
+
+def nearest_domain(model, hsv):
+    """The domain index the detector would pick for a frame of this HSV image."""
+    return detector_core.TreeDetector(model).select_domain(hsv)
 
 
 def _downscale_crop(value):
@@ -101,7 +121,9 @@ def evaluate_crop_images(model, crops, settings=None):
     for path, positive, _category in crops:
         bgr = dataset.read_image(path)
         hsv = features.bgr_to_hsv(bgr)
-        predictions.append(classify_window(model, np.ascontiguousarray(hsv[:, :, 2]), hsv, settings)[0])
+        domain = _domain_index(model, settings, hsv)
+        predictions.append(classify_window(model, np.ascontiguousarray(hsv[:, :, 2]), hsv, settings,
+                                           domain_index=domain)[0])
         labels.append(positive)
     return crop_metrics(labels, predictions)
 
@@ -148,14 +170,22 @@ def _subsample(items, count, rng):
 
 
 def evaluate_frame_crops(model, crops, settings=None):
+    """The crop protocol on windows cut from frames; each frame's domain: the settings', else the nearest."""
     labels, predictions = [], []
+    domains = {}
     for frame, cx, cy, side, positive in crops:
-        rows, cols = dataset.pixel_window(frame, cx, cy, side)
-        small = features.window_with_context(frame.value, cx - side / 2.0, cy - side / 2.0, side)
-        predictions.append(classify_window(model, frame.value[rows, cols], frame.hsv[rows, cols], settings,
-                                           small)[0])
+        if id(frame) not in domains:
+            domains[id(frame)] = _domain_index(model, settings, frame.hsv)
+        cues = frame_window_cues(model, domains[id(frame)], frame, cx, cy, side)
+        predictions.append(passes(model, domains[id(frame)], cues, settings))
         labels.append(positive)
     return crop_metrics(labels, predictions)
+
+
+def _domain_index(model, settings, hsv):
+    if settings is not None and settings.domain is not None:
+        return [d.name for d in model.domains].index(model.domain(settings.domain).name)
+    return nearest_domain(model, hsv)
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -178,24 +208,130 @@ def match_detections(detections, truths):
     return hits, false_positives, unmatched
 
 
-def evaluate_frames(model, frames, settings=None):
-    detector = detector_core.TreeDetector(model, settings)
-    n_hits = n_fp = n_miss = 0
-    errors = []
+FUNNEL_STAGES = ("svm", "peak", "cap", "nms", "colour", "texture")
+
+
+def frame_window_sizes(model, frame, crown_px):
+    """Window sizes for whole-frame detection: None (the model's, by frame width), from a crown size in
+    pixels, or "boxes": from the frame's own typical annotated crown (as a user who knows it would give)."""
+    if crown_px is None:
+        return None
+    if crown_px == "boxes":
+        crown_px = frame.typical_crown()
+        if crown_px <= 0:
+            return None
+    sizes = detector_core.crown_window_sizes(model, float(crown_px))
+    fitting = tuple(w for w in sizes if w <= min(frame.width, frame.height))
+    return fitting or None
+
+
+def _funnel(trace, truths, settings_threshold):
+    """How many of the truths survive each stage: a window centred in the box scoring above the SVM
+    threshold; a score-map peak; a peak within the candidate cap; a group's best window after NMS; the
+    colour test; the texture test (a detection)."""
+    def centred(items, box):
+        return any(abs(c[1] - box.x_center) <= box.width / 2.0 and abs(c[2] - box.y_center) <= box.height / 2.0
+                   for c in items)
+    windows = []
+    for plan, scores in trace["maps"]:
+        rows, cols = np.nonzero(scores > settings_threshold)
+        for row, col in zip(rows.tolist(), cols.tolist()):
+            x0, y0 = plan.window_origin(row, col)
+            windows.append((0.0, x0 + plan.window / 2.0, y0 + plan.window / 2.0, plan.window))
+    stages = {"svm": windows, "peak": trace["peaks"], "cap": trace["capped"], "nms": trace["nms"],
+              "colour": trace["colour"]}
+    return {name: sum(1 for box in truths if centred(items, box)) for name, items in stages.items()}
+
+
+def evaluate_frames(model, frames, settings=None, hull=False, crown_px=None, funnel=False):
+    """Frame-level figures of the detector on annotated frames (see the module docstring).
+
+    hull: score only inside each frame's annotated area (detections outside it are ignored); crown_px: see
+    frame_window_sizes; funnel: also count the crowns surviving each stage. Also returned: the detections'
+    scores with hit flags (a precision-recall curve) and the false alarms centred on look-alike boxes."""
+    settings = settings or detector_core.DetectorSettings()
+    detectors = {}
+    n_hits = n_fp = n_miss = n_lookalike = 0
+    errors, scored = [], []
+    stages = dict((name, 0) for name in FUNNEL_STAGES)
+    domains_used = {}
     for frame in frames:
-        detections = detector.detect(frame.bgr, frame.hsv)
-        hits, false_positives, misses = match_detections(detections, frame.trees(model.species))
+        windows = frame_window_sizes(model, frame, crown_px)
+        if windows not in detectors:
+            detectors[windows] = detector_core.TreeDetector(model, _with_windows(settings, windows))
+        detector = detectors[windows]
+        trace = {} if funnel else None
+        value = cv2.extractChannel(frame.hsv, 2)
+        maps = detector.score_maps(value)
+        detections = detector.detections_from_maps(maps, frame.hsv, value, trace)
+        name = model.domains[detector.domain_index].name
+        domains_used[name] = domains_used.get(name, 0) + 1
+        truths = frame.trees(model.species)
+        if hull:
+            detections = [d for d in detections if frame.in_area(d.x, d.y)]
+        hits, false_positives, misses = match_detections(detections, truths)
         n_hits += len(hits)
         n_fp += len(false_positives)
         n_miss += len(misses)
+        lookalikes = [b for b in frame.boxes if b.label and b.label != model.species]
+        n_lookalike += sum(1 for d in false_positives if any(
+            abs(d.x - b.x_center) <= b.width / 2.0 and abs(d.y - b.y_center) <= b.height / 2.0 for b in lookalikes))
         errors.extend(math.hypot(d.x - t.x_center, d.y - t.y_center) for d, t in hits)
+        hit_ids = set(id(d) for d, _t in hits)
+        scored.extend((d.score, id(d) in hit_ids) for d in detections)
+        if funnel:
+            counts = _funnel(trace, truths, detector.threshold("svm_threshold"))
+            counts["texture"] = len(hits)
+            for name_ in FUNNEL_STAGES:
+                stages[name_] += counts[name_]
+    result = _figures(n_hits, n_fp, n_miss, errors, len(frames))
+    result.update(n_lookalike_false_alarms=n_lookalike, false_alarms_per_image=n_fp / float(max(1, len(frames))),
+                  scored=scored, domains=domains_used)
+    if funnel:
+        result["funnel"] = stages
+    return result
+
+
+def _with_windows(settings, windows):
+    if windows is None:
+        return settings
+    copy = detector_core.DetectorSettings(
+        svm_threshold=settings.svm_threshold, variance_threshold=settings.variance_threshold,
+        hs_threshold=settings.hs_threshold, window_sizes=windows, step=settings.step,
+        nms_overlap=settings.nms_overlap, max_detections=settings.max_detections, smoothing=settings.smoothing,
+        edge_threshold=settings.edge_threshold, domain=settings.domain)
+    return copy
+
+
+def _figures(n_hits, n_fp, n_miss, errors, n_frames):
     precision = n_hits / (n_hits + n_fp) if n_hits + n_fp else 0.0
     recall = n_hits / (n_hits + n_miss) if n_hits + n_miss else 0.0
     return {
         "precision": precision, "recall": recall,
         "f1": 2 * precision * recall / (precision + recall) if precision + recall else 0.0,
-        "n_frames": len(frames), "n_trees": n_hits + n_miss, "n_detections": n_hits + n_fp,
+        "n_frames": n_frames, "n_trees": n_hits + n_miss, "n_detections": n_hits + n_fp,
+        "n_hits": n_hits, "n_false_alarms": n_fp,
         "centre_error_px_mean": float(np.mean(errors)) if errors else None,
         "centre_error_px_median": float(np.median(errors)) if errors else None,
         "centre_error_px_p90": float(np.percentile(errors, 90)) if errors else None,
+        "centre_errors": [float(e) for e in errors],
     }
+
+
+def combine(results):
+    """Pooled figures of several evaluate_frames results (hits, false alarms and misses added up)."""
+    hits = sum(r["n_hits"] for r in results)
+    false_alarms = sum(r["n_false_alarms"] for r in results)
+    misses = sum(r["n_trees"] - r["n_hits"] for r in results)
+    errors = [e for r in results for e in r["centre_errors"]]
+    return _figures(hits, false_alarms, misses, errors, sum(r["n_frames"] for r in results))
+
+
+def precision_recall_curve(scored, n_trees):
+    """[(score threshold, precision, recall)] over the detections' scores (best first)."""
+    points = []
+    hits = 0
+    for index, (score, hit) in enumerate(sorted(scored, key=lambda item: -item[0]), start=1):
+        hits += hit
+        points.append((score, hits / float(index), hits / float(max(1, n_trees))))
+    return points

@@ -11,14 +11,16 @@
 #   4. Non-maximum suppression across window sizes: candidates are grouped greedily by overlap with the best
 #      remaining one; each group is one object. A group whose best window is centred inside the crown box
 #      of an already accepted detection is the same tree (a small window on one side of a big crown).
-#   5. Only each group's best window gets the per-window tests, cheapest first: hue/saturation similarity
-#      of the window's central region (the crown, not the ground around it) to the species template
+#   5. Only each group's best window gets the per-window tests, cheapest first: the colour score of the
+#      window's central region (the crown, not the ground around it) against the imagery's colour model
 #      (rejects roofs, road crossings, other palms' colours), then the bottom layer's contrast-normalised
 #      global HOG histogram on the full-resolution window (foranav_features.hog_texture: rejects other palm
 #      species).
 #   6. A group that passes is one detection; its centre is the score^2-weighted mean of the refined centres
 #      of its members near the best one (a few pixels better than any single window on a lattice).
-# Every threshold is a setting (DetectorSettings) whose default comes from the model file.
+# Every threshold is a setting (DetectorSettings) whose default comes from the model file. A model holds one
+# colour model and threshold set per imagery ("domain"); the detector uses the one named in the settings,
+# else, for a model of several, the one whose training frames' colours are nearest the frame's.
 import collections
 import math
 
@@ -32,7 +34,7 @@ Detection = collections.namedtuple("Detection", "x y w h score")  # centre and b
 DEFAULT_STEP = 2  # window step in downscaled pixels = W/12 (paper: 8 = W/3, see PAPER_STEP)
 PAPER_STEP = features.HOG_WINDOW // 3
 DEFAULT_NMS_OVERLAP = 0.3  # intersection over union above which two windows are the same object
-DEFAULT_MAX_DETECTIONS = 8
+DEFAULT_MAX_DETECTIONS = 8  # the camera's maxtrees default; None = every tree (the host's detect)
 DEFAULT_SMOOTHING = 1.0  # removes single-window noise peaks; a crown's blob of high scores is wider
 FUSION_RADIUS = 0.15  # windows centred within this fraction of the best window's side are averaged
 MAX_CANDIDATES = 64  # per frame, best first: bounds the work when a frame is full of tree-like texture
@@ -52,7 +54,9 @@ class DetectorSettings(object):
     nms_overlap         IoU above which windows are merged into one object
     smoothing           Gaussian sigma applied to each score map before peaks are taken, in lattice units
                         (gcd(step, 6) downscaled pixels: W/12 by default); 0 = none
-    max_detections      at most this many detections per frame, best first
+    max_detections      at most this many detections per frame, best first (None: no limit)
+    domain              name of the model's imagery whose colour model and thresholds to use (None: the
+                        only one, or the one nearest each frame's colours)
     edge_threshold      score a peak on the border of its score map (window touching the frame edge) must
                         also exceed (EDGE_TEST_OFF: no such test). Such a peak is not a verified maximum:
                         the score may keep rising outside the frame, where the rest of a cut crown is.
@@ -63,14 +67,15 @@ class DetectorSettings(object):
 
     def __init__(self, svm_threshold=None, variance_threshold=None, hs_threshold=None, window_sizes=None,
                  step=DEFAULT_STEP, nms_overlap=DEFAULT_NMS_OVERLAP, max_detections=DEFAULT_MAX_DETECTIONS,
-                 smoothing=DEFAULT_SMOOTHING, edge_threshold=None):
+                 smoothing=DEFAULT_SMOOTHING, edge_threshold=None, domain=None):
         self.svm_threshold = svm_threshold
         self.variance_threshold = variance_threshold
         self.hs_threshold = hs_threshold
         self.window_sizes = tuple(window_sizes) if window_sizes else None
         self.step = int(step)
         self.nms_overlap = float(nms_overlap)
-        self.max_detections = int(max_detections)
+        self.max_detections = None if max_detections is None else int(max_detections)
+        self.domain = domain
         self.smoothing = float(smoothing)
         self.edge_threshold = None if edge_threshold is None else float(edge_threshold)
         if self.edge_threshold is not None and self.edge_threshold != self.edge_threshold:
@@ -79,7 +84,7 @@ class DetectorSettings(object):
             raise ValueError("step must be 1..%d downscaled pixels" % features.HOG_WINDOW)
         if not 0.0 < self.nms_overlap < 1.0:
             raise ValueError("nms_overlap must be between 0 and 1")
-        if self.max_detections < 1:
+        if self.max_detections is not None and self.max_detections < 1:
             raise ValueError("max_detections must be at least 1")
 
 
@@ -92,6 +97,17 @@ def model_window_sizes(model, frame_width):
         rounded = max(1, int(round(window * factor / features.HOG_WINDOW))) * features.HOG_WINDOW
         if rounded not in sizes:
             sizes.append(rounded)
+    return tuple(sizes)
+
+
+def crown_window_sizes(model, crown_px):
+    """Window sides for a frame whose typical crown is crown_px pixels across: crown_px x the model's
+    calibrated window/crown ratios (at least W_d)."""
+    sizes = []
+    for ratio in model.crown_ratios:
+        window = max(features.HOG_WINDOW, int(round(crown_px * ratio)))
+        if window not in sizes:
+            sizes.append(window)
     return tuple(sizes)
 
 
@@ -189,14 +205,32 @@ class TreeDetector(object):
             weights.transpose(4, 0, 1, 2, 3).reshape(features.HOG_BINS, -1)).astype(np.float32)
         self._bin_tables = [np.ascontiguousarray(features.SOFT_BIN_TABLE_U8[:, b]) for b in range(features.HOG_BINS)]
         self._plans = {}
-        self._template_hue = features.smooth_histogram(model.template_hue)
-        self._template_sat = features.smooth_histogram(model.template_sat)
+        self._colour = [features.prepare_colour_vectors(model.colour_kind, d.colour_vectors) for d in model.domains]
+        self._fixed_domain = None
+        if self.settings.domain is not None:
+            self._fixed_domain = [d.name for d in model.domains].index(model.domain(self.settings.domain).name)
+        elif len(model.domains) == 1:
+            self._fixed_domain = 0
+        self.domain_index = self._fixed_domain or 0  # the domain of the last frame
+
+    def select_domain(self, hsv):
+        """Index of the domain for this frame: the fixed one, else the nearest by whole-frame colour."""
+        if self._fixed_domain is not None:
+            return self._fixed_domain
+        colour = features.frame_colour(hsv)
+        similarities = [features.frame_colour_similarity(colour, d.frame_colour) for d in self.model.domains]
+        return int(np.argmax(similarities))
 
     # -- settings resolved against the model --------------------------------------------------------------
 
     def threshold(self, name):
+        """A threshold: the setting, else the current domain's (the edge threshold is the model's)."""
         value = getattr(self.settings, name)
-        return float(getattr(self.model, name) if value is None else value)
+        if value is not None:
+            return float(value)
+        if name == "edge_threshold":
+            return float(self.model.edge_threshold)
+        return float(getattr(self.model.domains[self.domain_index], name))
 
     def window_sizes(self, frame_width):
         return self.settings.window_sizes or model_window_sizes(self.model, frame_width)
@@ -229,8 +263,11 @@ class TreeDetector(object):
         atlas.fill(value)
         return atlas.split(self._score_atlas(atlas))
 
-    def detections_from_maps(self, maps, hsv, value):
-        """Steps 3-6: candidates, grouping, per-object tests, fused centres (shared with the reference)."""
+    def detections_from_maps(self, maps, hsv, value, trace=None):
+        """Steps 3-6: candidates, grouping, per-object tests, fused centres (shared with the reference).
+
+        trace: a dict to receive each stage's survivors (host tools: the funnel), else None."""
+        self.domain_index = self.select_domain(hsv)
         svm_threshold = self.threshold("svm_threshold")
         edge_threshold = self.threshold("edge_threshold")
         candidates = []
@@ -239,25 +276,36 @@ class TreeDetector(object):
                 scores = cv2.GaussianBlur(scores, (0, 0), self.settings.smoothing / plan.stride)
             candidates.extend(_local_maxima(plan, scores, svm_threshold, edge_threshold))
         candidates.sort(key=lambda c: -c[0])
-        del candidates[max(MAX_CANDIDATES, CANDIDATES_PER_DETECTION * self.settings.max_detections):]
+        if trace is not None:
+            trace.update(maps=maps, peaks=list(candidates), nms=[], colour=[], domain=self.domain_index)
+        if self.settings.max_detections is not None:
+            del candidates[max(MAX_CANDIDATES, CANDIDATES_PER_DETECTION * self.settings.max_detections):]
+        if trace is not None:
+            trace["capped"] = list(candidates)
         detections = []
+        hs_threshold, variance_threshold = self.threshold("hs_threshold"), self.threshold("variance_threshold")
         for group in _group(candidates, self.settings.nms_overlap):
             if _inside_a_crown(group[0], detections):
                 continue
-            if self._passes_window_tests(group[0], hsv, value):
+            x0, y0, side = _pixel_window(group[0], value.shape)
+            if trace is not None:
+                trace["nms"].append(group[0])
+            if self.colour_score(hsv[y0:y0 + side, x0:x0 + side]) <= hs_threshold:
+                continue
+            if trace is not None:
+                trace["colour"].append(group[0])
+            if features.hog_texture(value[y0:y0 + side, x0:x0 + side]) > variance_threshold:
                 detections.append(_fuse(group, svm_threshold, self.model.window_margin))
                 if len(detections) == self.settings.max_detections:
                     break
         return detections
 
-    def _passes_window_tests(self, candidate, hsv, value):
-        x0, y0, side = _pixel_window(candidate, value.shape)
-        similarity = features.hs_similarity_to_smoothed(hsv[y0:y0 + side, x0:x0 + side], self._template_hue,
-                                                        self._template_sat)
-        if similarity <= self.threshold("hs_threshold"):
-            return False
-        variance = features.hog_texture(value[y0:y0 + side, x0:x0 + side])
-        return variance > self.threshold("variance_threshold")
+    def colour_score(self, hsv_window):
+        """The window's colour score against the current domain's colour model."""
+        hue, sat = features.smoothed_hs(hsv_window)
+        domain = self.model.domains[self.domain_index]
+        return features.colour_score(self.model.colour_kind, self._colour[self.domain_index], domain.colour_bias,
+                                     hue, sat)
 
     def _score_atlas(self, atlas):
         """Linear SVM score of the window at every lattice position of the atlas (g px apart; o = lattice

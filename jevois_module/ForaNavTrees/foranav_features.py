@@ -206,6 +206,56 @@ def hs_similarity_to_smoothed(hsv_window, smooth_template_h, smooth_template_s):
                                                                               smooth_template_s))
 
 
+# Colour models of one imagery (foranav_model: colour_kind, colour_vectors, colour_bias)
+
+COLOUR_KINDS = ("templates", "linear")
+
+
+def smoothed_hs(hsv_window):
+    """(hue, saturation): the smoothed 256-bin histograms (pixel counts) of the window's colour_region."""
+    hue, sat = hs_histograms(colour_region(hsv_window))
+    return smooth_histogram(hue), smooth_histogram(sat)
+
+
+def colour_feature(hue_smoothed, sat_smoothed):
+    """The linear colour classifier's input: both smoothed histograms normalised to a mean of 1 per bin."""
+    scale = HS_BINS / max(float(hue_smoothed.sum()), 1e-9)
+    return np.concatenate([hue_smoothed, sat_smoothed]).astype(np.float32) * np.float32(scale)
+
+
+def prepare_colour_vectors(kind, vectors):
+    """What colour_score compares with: templates smoothed once per half; linear weights as they are."""
+    vectors = np.asarray(vectors, np.float32)
+    if kind != "templates":
+        return vectors
+    return [(smooth_histogram(v[:HS_BINS]), smooth_histogram(v[HS_BINS:])) for v in vectors]
+
+
+def colour_score(kind, prepared, bias, hue_smoothed, sat_smoothed):
+    """A window's colour score against one imagery's colour model (higher = more like the species there).
+
+    templates: the best, over the templates, mean of the hue and saturation Pearson correlations (paper
+    eq. 6; one template = the paper's test); linear: weights . colour_feature + bias."""
+    if kind == "templates":
+        return max(0.5 * (pearson(hue_smoothed, hue) + pearson(sat_smoothed, sat)) for hue, sat in prepared)
+    return float(np.dot(prepared[0], colour_feature(hue_smoothed, sat_smoothed))) + bias
+
+
+def frame_colour(hsv):
+    """A whole frame's hue+saturation histogram (512, each half normalised to sum 1): picks the nearest domain."""
+    hue = cv2.calcHist([hsv], [0], None, [HS_BINS], [0, 256]).ravel()
+    sat = cv2.calcHist([hsv], [1], None, [HS_BINS], [0, 256]).ravel()
+    total = max(float(hue.sum()), 1.0)
+    return np.concatenate([hue, sat]).astype(np.float32) / np.float32(total)
+
+
+def frame_colour_similarity(colour_a, colour_b):
+    """Mean hue and saturation Pearson correlation of two frame_colour histograms (smoothed)."""
+    a_h, a_s = smooth_histogram(colour_a[:HS_BINS]), smooth_histogram(colour_a[HS_BINS:])
+    b_h, b_s = smooth_histogram(colour_b[:HS_BINS]), smooth_histogram(colour_b[HS_BINS:])
+    return 0.5 * (pearson(a_h, b_h) + pearson(a_s, b_s))
+
+
 # ---------------------------------------------------------------------------------------------------------
 # Top layer
 

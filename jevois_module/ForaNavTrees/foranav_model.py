@@ -3,38 +3,64 @@
 # A model is a plain .npz of arrays, loaded with allow_pickle=False, so numpy 1.16 on the JeVois-A33 reads
 # what numpy 2 on the host wrote. Strings are fixed-width unicode arrays; every scalar is a 0-d array.
 # The file carries everything that must not drift between training and deployment: the HOG configuration
-# (checked against foranav_features on load), the linear SVM, the three thresholds, the colour template,
-# the species and the window sizes.
+# (checked against foranav_features on load), the one linear SVM, and per imagery ("domain": the photographs
+# of one camera, light and place) a colour model and the three thresholds; the species, window sizes and
+# the window/crown ratios.
 #
-# Keys (format version 2; version 1 held the raw Var_hog as variance_threshold):
+# Keys (format version 3; version 2 held one colour template and one set of thresholds for all imagery):
 #   format_version   int      FORMAT_VERSION; a file of another version is refused with a clear message
 #   species          str      e.g. "oil_palm" (also the id of N2 serial lines)
 #   hog_config       int[7]   W_d, cell, block, block stride, bins, angle levels, block-norm eps (x1000)
 #   svm_kind         str      "linear": score = weights . descriptor + bias
 #   svm_weights      f32[324] top-layer descriptor weights
 #   svm_bias         f32
-#   svm_threshold    f32      a window is a candidate when its score exceeds this
-#   variance_threshold f32    bottom-layer cue foranav_features.hog_texture must exceed this (1/px^2)
-#   hs_threshold     f32      mean hue/saturation Pearson correlation must exceed this
 #   edge_threshold   f32      SVM score a peak on a score map's border (window at the frame edge) must exceed
-#   template_hue     f32[256] hue histogram of the species (normalised to sum 1)
-#   template_sat     f32[256] saturation histogram of the species (normalised to sum 1)
-#   window_sizes     int[k]   sliding-window sides W in pixels of the training frames' resolution
-#   window_margin    f32      window side / crown diameter used in training (box size = W / margin)
+#   colour_kind      str      "templates": similarity = best mean hue/saturation Pearson correlation with the
+#                             domain's templates; "linear": a linear classifier on the histograms
+#                             (foranav_features.colour_score)
+#   domain_names     str[D]   one name per imagery (D >= 1), e.g. the training CSV's folder
+#   colour_vectors   f32[D,K,512]  templates: K hue(256)+saturation(256) histograms (each half sums to 1);
+#                             linear: K = 1 weight vector
+#   colour_bias      f32[D]   linear: the classifier's bias (templates: 0)
+#   frame_colour     f32[D,512]  mean whole-frame hue+saturation histogram of the domain's training frames
+#                             (the detector picks the nearest domain of a frame by it when none is set)
+#   svm_threshold    f32[D]   a window is a candidate when its score exceeds this
+#   hs_threshold     f32[D]   colour score a detection must exceed
+#   variance_threshold f32[D] bottom-layer cue foranav_features.hog_texture must exceed this (1/px^2)
+#   window_sizes     int[k]   sliding-window sides W in pixels of the training frames' resolution (camera)
+#   window_margin    f32      window side / crown diameter of the training windows (box size = W / margin)
 #   reference_width  int      frame width the window sizes refer to (they scale with the frame width)
+#   crown_ratios     f32[k]   window sides / typical crown diameter for whole-frame detection when the crown
+#                             size in pixels is given (foranav detect --crown-px), calibrated on frames
 #   seed             int      training seed (provenance)
 #   notes            str      free text: data, counts, figures (provenance)
+#   provenance       str      sources and licences of the training imagery
+import zipfile
+
 import numpy as np
 
 import foranav_features as features
 
-FORMAT_VERSION = 2
+FORMAT_VERSION = 3
 DEFAULT_EDGE_THRESHOLD = 0.0  # the SVM's decision boundary (models built in code; training calibrates it)
 SVM_KINDS = ("linear",)
 _EPS_SCALE = 1000.0
 REQUIRED_KEYS = ("format_version", "species", "hog_config", "svm_kind", "svm_weights", "svm_bias",
-                 "svm_threshold", "variance_threshold", "hs_threshold", "edge_threshold", "template_hue",
-                 "template_sat", "window_sizes", "window_margin", "reference_width", "seed", "notes")
+                 "edge_threshold", "colour_kind", "domain_names", "colour_vectors", "colour_bias", "frame_colour",
+                 "svm_threshold", "hs_threshold", "variance_threshold", "window_sizes", "window_margin",
+                 "reference_width", "crown_ratios", "seed", "notes", "provenance")
+# numpy dtype kinds each field may have: f float, i/u integer, U text
+FIELD_KINDS = {"format_version": "iu", "species": "U", "hog_config": "iu", "svm_kind": "U", "svm_weights": "fiu",
+               "svm_bias": "fiu", "edge_threshold": "fiu", "colour_kind": "U", "domain_names": "U",
+               "colour_vectors": "fiu", "colour_bias": "fiu", "frame_colour": "fiu", "svm_threshold": "fiu",
+               "hs_threshold": "fiu", "variance_threshold": "fiu", "window_sizes": "iu", "window_margin": "fiu",
+               "reference_width": "iu", "crown_ratios": "fiu", "seed": "iu", "notes": "U", "provenance": "U"}
+SCALAR_FIELDS = ("format_version", "species", "svm_kind", "svm_bias", "edge_threshold", "colour_kind",
+                 "window_margin", "reference_width", "seed", "notes", "provenance")
+COLOUR_LENGTH = 2 * features.HS_BINS
+LFS_POINTER_PREFIX = b"version https://git-lfs"
+NPZ_MAGIC = b"PK\x03\x04"
+NPY_MAGIC = b"\x93NUMPY"
 
 
 class ModelFormatError(ValueError):
@@ -47,50 +73,122 @@ def current_hog_config():
                      int(round(features.BLOCK_NORM_EPS * _EPS_SCALE))], np.int32)
 
 
-class TreeModel(object):
-    """A trained detector model (see the module comment for the meaning of each field)."""
+class Domain(object):
+    """One imagery's colour model and thresholds (see the module comment)."""
 
-    def __init__(self, species, svm_weights, svm_bias, svm_threshold, variance_threshold, hs_threshold,
-                 template_hue, template_sat, window_sizes, window_margin, reference_width, seed=0, notes="",
-                 edge_threshold=DEFAULT_EDGE_THRESHOLD):
+    def __init__(self, name, svm_threshold, hs_threshold, variance_threshold, colour_vectors, colour_bias=0.0,
+                 frame_colour=None):
+        self.name = str(name)
+        self.svm_threshold = float(svm_threshold)
+        self.hs_threshold = float(hs_threshold)
+        self.variance_threshold = float(variance_threshold)
+        self.colour_vectors = np.asarray(colour_vectors, np.float32).reshape(-1, COLOUR_LENGTH)
+        self.colour_bias = float(colour_bias)
+        if frame_colour is None:  # no frames known: the crowns' colour stands for the frame's
+            frame_colour = self.colour_vectors.mean(axis=0)
+        self.frame_colour = np.asarray(frame_colour, np.float32).ravel()
+
+    def validate(self):
+        if not self.name or len(self.name.split()) != 1:
+            raise ModelFormatError("domain name %r must be one word" % self.name)
+        if self.frame_colour.shape != (COLOUR_LENGTH,) or len(self.colour_vectors) == 0:
+            raise ModelFormatError("domain %s: colour vectors must have %d values" % (self.name, COLOUR_LENGTH))
+        values = [self.svm_threshold, self.hs_threshold, self.variance_threshold, self.colour_bias]
+        if not (np.all(np.isfinite(values)) and np.all(np.isfinite(self.colour_vectors))
+                and np.all(np.isfinite(self.frame_colour))):
+            raise ModelFormatError("domain %s: numbers must be finite" % self.name)
+
+
+class TreeModel(object):
+    """A trained detector model (see the module comment for the meaning of each field).
+
+    Built with one colour template (template_hue, template_sat) and one set of thresholds, it holds one
+    domain named `domain_name`; `domains` replaces them by several. svm_threshold, hs_threshold,
+    variance_threshold, template_hue and template_sat read (and set) the first domain's.
+    """
+
+    def __init__(self, species, svm_weights, svm_bias, svm_threshold=0.0, variance_threshold=0.0,
+                 hs_threshold=-1.0, template_hue=None, template_sat=None, window_sizes=(96,), window_margin=1.3,
+                 reference_width=352, seed=0, notes="", edge_threshold=DEFAULT_EDGE_THRESHOLD, domains=None,
+                 colour_kind="templates", crown_ratios=None, provenance="", domain_name="default"):
         self.species = str(species)
         self.svm_weights = np.asarray(svm_weights, np.float32).ravel()
         self.svm_bias = float(svm_bias)
-        self.svm_threshold = float(svm_threshold)
-        self.variance_threshold = float(variance_threshold)
-        self.hs_threshold = float(hs_threshold)
         self.edge_threshold = float(edge_threshold)
-        self.template_hue = np.asarray(template_hue, np.float32).ravel()
-        self.template_sat = np.asarray(template_sat, np.float32).ravel()
+        self.colour_kind = str(colour_kind)
+        if domains is None:
+            hue = np.ones(features.HS_BINS) if template_hue is None else template_hue
+            sat = np.ones(features.HS_BINS) if template_sat is None else template_sat
+            hue, sat = np.asarray(hue, np.float32).ravel(), np.asarray(sat, np.float32).ravel()
+            if hue.shape != (features.HS_BINS,) or sat.shape != (features.HS_BINS,):
+                raise ModelFormatError("template_hue and template_sat must have %d bins" % features.HS_BINS)
+            domains = [Domain(domain_name, svm_threshold, hs_threshold, variance_threshold,
+                              np.concatenate([hue, sat])[None, :])]
+        self.domains = list(domains)
         self.window_sizes = tuple(int(w) for w in np.asarray(window_sizes).ravel())
         self.window_margin = float(window_margin)
         self.reference_width = int(reference_width)
+        if crown_ratios is None:  # the training windows' own ratio
+            crown_ratios = (self.window_margin,)
+        self.crown_ratios = tuple(float(r) for r in np.asarray(crown_ratios).ravel())
         self.seed = int(seed)
         self.notes = str(notes)
+        self.provenance = str(provenance)
         self.validate()
+
+    # The first domain's values (single-imagery models, the camera's settings, older callers).
+    svm_threshold = property(lambda self: self.domains[0].svm_threshold,
+                             lambda self, value: setattr(self.domains[0], "svm_threshold", float(value)))
+    hs_threshold = property(lambda self: self.domains[0].hs_threshold,
+                            lambda self, value: setattr(self.domains[0], "hs_threshold", float(value)))
+    variance_threshold = property(lambda self: self.domains[0].variance_threshold,
+                                  lambda self, value: setattr(self.domains[0], "variance_threshold", float(value)))
+    template_hue = property(lambda self: self.domains[0].colour_vectors[0, :features.HS_BINS])
+    template_sat = property(lambda self: self.domains[0].colour_vectors[0, features.HS_BINS:])
+
+    def domain(self, name):
+        """The domain of this name; ModelFormatError (naming the known ones) when there is none."""
+        for domain in self.domains:
+            if domain.name == name:
+                return domain
+        raise ModelFormatError("no domain %r in the model (it has %s)"
+                               % (name, ", ".join(d.name for d in self.domains)))
 
     def validate(self):
         length = features.hog_descriptor_length()
         if self.svm_weights.shape != (length,):
             raise ModelFormatError("svm_weights has %d values, the HOG descriptor has %d"
                                    % (self.svm_weights.size, length))
-        for name in ("template_hue", "template_sat"):
-            if getattr(self, name).shape != (features.HS_BINS,):
-                raise ModelFormatError("%s must have %d bins" % (name, features.HS_BINS))
         if not self.window_sizes or min(self.window_sizes) < features.HOG_WINDOW:
             raise ModelFormatError("window_sizes must be non-empty and at least %d px" % features.HOG_WINDOW)
         if not self.species or len(self.species.split()) != 1:
             raise ModelFormatError("species must be one word")
-        values = [self.svm_bias, self.svm_threshold, self.variance_threshold, self.hs_threshold,
-                  self.edge_threshold, self.window_margin] + list(self.svm_weights)
-        if not np.all(np.isfinite(values)) or self.window_margin <= 0 or self.reference_width <= 0:
-            raise ModelFormatError("model numbers must be finite, margin and reference width positive")
+        if self.colour_kind not in features.COLOUR_KINDS:
+            raise ModelFormatError("colour_kind %r is not one of %s" % (self.colour_kind,
+                                                                      ", ".join(features.COLOUR_KINDS)))
+        if not self.domains:
+            raise ModelFormatError("a model needs at least one domain")
+        names = [d.name for d in self.domains]
+        if len(set(names)) != len(names):
+            raise ModelFormatError("domain names must be unique")
+        for domain in self.domains:
+            domain.validate()
+        counts = set(len(d.colour_vectors) for d in self.domains)
+        if len(counts) != 1 or (self.colour_kind == "linear" and counts != {1}):
+            raise ModelFormatError("every domain needs the same number of colour vectors (linear: 1)")
+        values = [self.svm_bias, self.edge_threshold, self.window_margin] + list(self.svm_weights)
+        values += list(self.crown_ratios)
+        if (not np.all(np.isfinite(values)) or self.window_margin <= 0 or self.reference_width <= 0
+                or not self.crown_ratios or min(self.crown_ratios) <= 0):
+            raise ModelFormatError("model numbers must be finite; margin, crown ratios and reference width "
+                                   "positive")
 
     def score(self, descriptor):
         """SVM decision value of one top-layer descriptor (positive = tree-like)."""
         return float(np.dot(self.svm_weights, descriptor)) + self.svm_bias
 
     def to_arrays(self):
+        domains = self.domains
         return {
             "format_version": np.array(FORMAT_VERSION, np.int32),
             "species": np.array(self.species),  # fixed-width unicode, no pickle
@@ -98,17 +196,22 @@ class TreeModel(object):
             "svm_kind": np.array("linear"),
             "svm_weights": self.svm_weights,
             "svm_bias": np.array(self.svm_bias, np.float32),
-            "svm_threshold": np.array(self.svm_threshold, np.float32),
-            "variance_threshold": np.array(self.variance_threshold, np.float32),
-            "hs_threshold": np.array(self.hs_threshold, np.float32),
             "edge_threshold": np.array(self.edge_threshold, np.float32),
-            "template_hue": self.template_hue,
-            "template_sat": self.template_sat,
+            "colour_kind": np.array(self.colour_kind),
+            "domain_names": np.array([d.name for d in domains]),
+            "colour_vectors": np.array([d.colour_vectors for d in domains], np.float32),
+            "colour_bias": np.array([d.colour_bias for d in domains], np.float32),
+            "frame_colour": np.array([d.frame_colour for d in domains], np.float32),
+            "svm_threshold": np.array([d.svm_threshold for d in domains], np.float32),
+            "hs_threshold": np.array([d.hs_threshold for d in domains], np.float32),
+            "variance_threshold": np.array([d.variance_threshold for d in domains], np.float32),
             "window_sizes": np.array(self.window_sizes, np.int32),
             "window_margin": np.array(self.window_margin, np.float32),
             "reference_width": np.array(self.reference_width, np.int32),
+            "crown_ratios": np.array(self.crown_ratios, np.float32),
             "seed": np.array(self.seed, np.int64),
             "notes": np.array(self.notes),
+            "provenance": np.array(self.provenance),
         }
 
 
@@ -117,26 +220,86 @@ def save_model(model, file_obj):
     np.savez(file_obj, **model.to_arrays())
 
 
+def _head(path, count=64):
+    """The first bytes of a path or seekable binary file object (the file object is rewound)."""
+    if hasattr(path, "read"):
+        start = path.tell()
+        head = path.read(count)
+        path.seek(start)
+        return head
+    with open(path, "rb") as handle:
+        return handle.read(count)
+
+
 def load_model(path):
-    """Read a model file; raises ModelFormatError naming the file for anything unusable."""
+    """Read a model file; raises ModelFormatError (one line naming the file) for anything unusable.
+
+    numpy's own messages are never passed on for files that are not .npz archives: for text they suggest
+    unpickling, which must never be done with a file of unknown origin."""
+    try:
+        head = _head(path)
+    except (IOError, OSError) as err:
+        raise ModelFormatError("%s: cannot read the model file (%s)" % (path, getattr(err, "strerror", None) or err))
+    if not head:
+        raise ModelFormatError("%s: the model file is empty" % path)
+    if head.startswith(LFS_POINTER_PREFIX):
+        raise ModelFormatError("%s: a Git LFS pointer, not the model itself (fetch it with 'git lfs pull')" % path)
+    if head.startswith(NPY_MAGIC):
+        raise ModelFormatError("%s: a single .npy array, not a ForaNav model (.npz archive)" % path)
+    if not head.startswith(NPZ_MAGIC):
+        raise ModelFormatError("%s: not a ForaNav model (not an .npz archive)" % path)
+    _check_archive(path)
     try:
         with np.load(path, allow_pickle=False) as data:
             arrays = {key: data[key] for key in data.files}
-    except (IOError, OSError, ValueError) as err:
-        raise ModelFormatError("%s: not a readable model file (%s)" % (path, err))
+    except (IOError, OSError, ValueError, EOFError, KeyError, zipfile.BadZipfile, RuntimeError) as err:
+        problem = str(err).splitlines()[0] if str(err) else type(err).__name__
+        if "pickle" in problem.lower():
+            problem = "it holds Python objects, which a model never does"
+        raise ModelFormatError("%s: damaged or not a model file (%s)" % (path, problem))
     return model_from_arrays(arrays, path)
+
+
+def _check_archive(path):
+    """A readable zip archive whose members all pass their CRC check (before numpy sees it: numpy 1.16 prints
+    a stray traceback for a truncated archive)."""
+    start = path.tell() if hasattr(path, "read") else None
+    try:
+        with zipfile.ZipFile(path) as archive:
+            damaged = archive.testzip()
+    except (zipfile.BadZipfile, IOError, OSError, EOFError, ValueError, RuntimeError) as err:
+        raise ModelFormatError("%s: damaged or truncated model file (%s)" % (path, str(err).splitlines()[0] if str(err)
+                                                                            else type(err).__name__))
+    finally:
+        if start is not None:
+            path.seek(start)
+    if damaged is not None:
+        raise ModelFormatError("%s: damaged model file (%s fails its CRC check)" % (path, damaged))
+
+
+def _check_field_types(arrays, name):
+    for key, kinds in FIELD_KINDS.items():
+        array = arrays[key]
+        if not isinstance(array, np.ndarray) or array.dtype.kind not in kinds:
+            raise ModelFormatError("%s: field %s has the wrong type (%s)" % (name, key, getattr(array, "dtype", "?")))
+        if key in SCALAR_FIELDS and array.size != 1:
+            raise ModelFormatError("%s: field %s must be a single value" % (name, key))
 
 
 def model_from_arrays(arrays, name="model"):
     if "format_version" not in arrays:
         raise ModelFormatError("%s: not a ForaNav model (no format_version)" % name)
-    version = int(arrays["format_version"])
+    try:
+        version = int(arrays["format_version"])
+    except (TypeError, ValueError):
+        raise ModelFormatError("%s: field format_version has the wrong type" % name)
     if version != FORMAT_VERSION:
         raise ModelFormatError("%s: model format version %d, this detector reads version %d (retrain it with "
                                "'foranav train')" % (name, version, FORMAT_VERSION))
     missing = [key for key in REQUIRED_KEYS if key not in arrays]
     if missing:
         raise ModelFormatError("%s: missing %s" % (name, ", ".join(missing)))
+    _check_field_types(arrays, name)
     if not np.array_equal(np.asarray(arrays["hog_config"]), current_hog_config()):
         raise ModelFormatError("%s: trained with HOG configuration %s, this detector uses %s"
                                % (name, list(arrays["hog_config"]), list(current_hog_config())))
@@ -144,13 +307,29 @@ def model_from_arrays(arrays, name="model"):
     if kind not in SVM_KINDS:
         raise ModelFormatError("%s: SVM kind %r is not supported (only %s)" % (name, kind, ", ".join(SVM_KINDS)))
     try:
+        names = [str(n) for n in np.asarray(arrays["domain_names"]).ravel()]
+        count = len(names)
+        vectors = np.asarray(arrays["colour_vectors"], np.float32)
+        if vectors.ndim != 3 or vectors.shape[0] != count or vectors.shape[2] != COLOUR_LENGTH:
+            raise ModelFormatError("colour_vectors must be (%d domains, K, %d)" % (count, COLOUR_LENGTH))
+        per_domain = {}
+        for key in ("colour_bias", "svm_threshold", "hs_threshold", "variance_threshold"):
+            per_domain[key] = np.asarray(arrays[key], np.float64).ravel()
+            if per_domain[key].shape != (count,):
+                raise ModelFormatError("%s must have one value per domain (%d)" % (key, count))
+        frame_colour = np.asarray(arrays["frame_colour"], np.float32)
+        if frame_colour.shape != (count, COLOUR_LENGTH):
+            raise ModelFormatError("frame_colour must be (%d domains, %d)" % (count, COLOUR_LENGTH))
+        domains = [Domain(names[i], per_domain["svm_threshold"][i], per_domain["hs_threshold"][i],
+                          per_domain["variance_threshold"][i], vectors[i], per_domain["colour_bias"][i],
+                          frame_colour[i]) for i in range(count)]
         return TreeModel(
-            species=str(arrays["species"]), svm_weights=arrays["svm_weights"],
-            svm_bias=float(arrays["svm_bias"]), svm_threshold=float(arrays["svm_threshold"]),
-            variance_threshold=float(arrays["variance_threshold"]), hs_threshold=float(arrays["hs_threshold"]),
-            edge_threshold=float(arrays["edge_threshold"]),
-            template_hue=arrays["template_hue"], template_sat=arrays["template_sat"],
-            window_sizes=arrays["window_sizes"], window_margin=float(arrays["window_margin"]),
-            reference_width=int(arrays["reference_width"]), seed=int(arrays["seed"]), notes=str(arrays["notes"]))
+            species=str(arrays["species"]), svm_weights=arrays["svm_weights"], svm_bias=float(arrays["svm_bias"]),
+            edge_threshold=float(arrays["edge_threshold"]), colour_kind=str(arrays["colour_kind"]),
+            domains=domains, window_sizes=arrays["window_sizes"], window_margin=float(arrays["window_margin"]),
+            reference_width=int(arrays["reference_width"]), crown_ratios=arrays["crown_ratios"],
+            seed=int(arrays["seed"]), notes=str(arrays["notes"]), provenance=str(arrays["provenance"]))
     except ModelFormatError as err:
         raise ModelFormatError("%s: %s" % (name, err))
+    except (TypeError, ValueError, IndexError) as err:
+        raise ModelFormatError("%s: a field has the wrong type or shape (%s)" % (name, err))
