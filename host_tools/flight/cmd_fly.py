@@ -45,10 +45,12 @@ def add_arguments(parser):
     parser.add_argument("--hide-tree", type=int, help="hide this tree id from the camera ...")
     parser.add_argument("--hide-s", type=float, default=5.0,
                         help="... for this many seconds from when the app first approaches it (default 5)")
-    parser.add_argument("--pixel-noise", type=float, default=None, help="oracle: pixel noise std (px)")
+    parser.add_argument("--pixel-noise", type=float, default=None,
+                        help="detection centre noise std (px; default oracle 1.5, sim 0 on top of sensor noise)")
     parser.add_argument("--latency-ms", type=int, default=None,
                         help="camera latency (ms; default sim: one frame, oracle: 50)")
-    parser.add_argument("--fps", type=float, default=None, help="sim: camera frame rate (default 9, the paper)")
+    parser.add_argument("--fps", type=float, default=None,
+                        help="camera frame rate (default sim 9, the paper; oracle 10)")
     parser.add_argument("--silence", action="append", default=[], metavar="START:DURATION",
                         help="fault: nothing reaches the wire from START for DURATION seconds (repeatable)")
     parser.add_argument("--garbage-rate", type=float, default=0.0,
@@ -104,12 +106,10 @@ def _window(text):
 def _camera_kwargs(args):
     kwargs = {}
     if args.fps is not None:
-        if args.camera != "sim" or not args.fps > 0:
-            raise ForaNavError("--fps: a positive frame rate, with --camera sim")
+        if not args.fps > 0:
+            raise ForaNavError("--fps: must be a positive frame rate")
         kwargs["frame_period_ms"] = int(round(1000.0 / args.fps))
     if args.pixel_noise is not None:
-        if args.camera != "oracle":
-            raise ForaNavError("--pixel-noise: only with --camera oracle (the sim camera has sensor noise)")
         if args.pixel_noise < 0:
             raise ForaNavError("--pixel-noise: must not be negative")
         kwargs["pixel_noise_px"] = args.pixel_noise
@@ -120,6 +120,16 @@ def _camera_kwargs(args):
     if args.cam_offset is not None:
         kwargs["mount_offset"] = tuple(args.cam_offset)
     return kwargs
+
+
+def flight_options(args):
+    """The harness options of parsed fly arguments (sweeps build their flights with it)."""
+    return _options(args)
+
+
+def camera_kwargs(args):
+    """The camera factory's keyword arguments of parsed fly arguments (sweeps build their flights with it)."""
+    return _camera_kwargs(args)
 
 
 def print_table(summary, out=None):
