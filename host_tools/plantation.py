@@ -51,7 +51,7 @@ INTEGER_RANGES = ("columns", "lookalikes_beside", "off_column_palms", "roofs", "
 class PlantationRanges:
     """Each field: (lo, hi), drawn uniformly per map (integers: inclusive). Defaults resemble the paper maps."""
     columns: tuple = (1, 3)  # planting columns, flown as a serpentine
-    column_length_m: tuple = (1.5, 3.0)
+    column_length_m: tuple = (1.2, 2.4)
     column_spacing_m: tuple = (0.9, 1.2)  # between neighbouring columns
     tree_spacing_m: tuple = (0.45, 0.65)  # between neighbouring slots of a column
     crown_m: tuple = (0.30, 0.45)  # oil palm crown size, per tree
