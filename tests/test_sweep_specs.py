@@ -119,3 +119,24 @@ def test_that_the_wilson_interval_contains_the_rate_and_matches_the_closed_form(
     assert lo <= p <= hi and 0.0 <= lo and hi <= 1.0
     assert (lo == 0.0) == (successes == 0) and (hi == 1.0) == (successes == n)
     assert math.isclose(hi - lo, wilson(n - successes, n)[1] - wilson(n - successes, n)[0])
+
+
+def _flown_in_a_row(camera, ranges):
+    first = flight_spec(21, 0, camera=camera, ranges=ranges)
+    other = flight_spec(21, 1, faults="harsh", camera=camera, ranges=ranges)
+    return [fly_task(spec) for spec in (first, other, first)]
+
+
+def test_that_oracle_flights_in_a_row_in_one_process_leave_no_state_behind():
+    # Test: A, then B (harsh faults), then A again in this process
+    a, b, a_again = _flown_in_a_row("oracle", SMALL)
+    # Assert
+    assert a["status"] == b["status"] == a_again["status"] == "ok"
+    assert a["summary"] == a_again["summary"] and a["summary"] != b["summary"]
+
+
+@pytest.mark.slow
+def test_that_vision_flights_in_a_row_in_one_process_leave_no_state_behind():
+    a, b, a_again = _flown_in_a_row("sim", PlantationRanges(columns=(1, 1), column_length_m=(1.2, 1.2)))
+    assert a["status"] == b["status"] == a_again["status"] == "ok"
+    assert a["summary"] == a_again["summary"] and a["summary"] != b["summary"]

@@ -41,7 +41,9 @@ def fly_task(spec):
     return result
 
 
-def _client(scheduler, workers):
+def open_client(scheduler=None, workers=None):
+    """(client, cluster): a Client of the running cluster at ``scheduler``, or of a new LocalCluster of
+    ``workers`` single-threaded processes (cluster is then returned so the caller can close it)."""
     try:
         from dask.distributed import Client, LocalCluster
     except ImportError:
@@ -53,38 +55,45 @@ def _client(scheduler, workers):
             raise ForaNavError("--scheduler %s: cannot connect: %s" % (scheduler, err))
     workers = workers or os.cpu_count() or 1
     cluster = LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True,
-                           dashboard_address=None, silence_logs=40)
+                           dashboard_address=":0", silence_logs=40)
     return Client(cluster), cluster
+
+
+def fly_on(client, specs, on_result, key_prefix="flight"):
+    """Submit one task per spec; call ``on_result(result)`` as each finishes (any order)."""
+    from dask.distributed import as_completed
+
+    futures = {client.submit(fly_task, spec, key="%s-%06d" % (key_prefix, spec["index"]), pure=False): spec
+               for spec in specs}
+    for future in as_completed(futures):
+        spec = futures.pop(future)
+        try:
+            result = future.result()
+        except Exception:  # the worker died under the flight (KilledWorker, ...)
+            result = {"index": spec["index"], "spec": spec, "status": "error", "traceback": traceback.format_exc()}
+        on_result(result)
 
 
 def run_sweep(specs, store, *, scheduler=None, workers=None, progress=None):
     """Fly the specs not yet in ``store`` -> {"skipped", "flown", "failed", "wall_s"}."""
-    from dask.distributed import as_completed
-
     finished = store.finished()
     todo = [s for s in specs if s["index"] not in finished]
     counts = {"skipped": len(specs) - len(todo), "flown": 0, "failed": 0, "wall_s": 0.0}
     if not todo:
         return counts
     started = time.monotonic()
-    client, cluster = _client(scheduler, workers)
+    client, cluster = open_client(scheduler, workers)
+
+    def on_result(result):
+        store.put(result)
+        counts["flown"] += 1
+        counts["failed"] += result["status"] != "ok" or not result["summary"]["success"]
+        if progress is not None:
+            progress(counts["flown"], len(todo), counts["failed"], time.monotonic() - started)
+
     try:
         store.record_attempts([s["index"] for s in todo])
-        tag = "%d-%d" % (os.getpid(), store.run or 0)
-        futures = {client.submit(fly_task, spec, key="flight-%s-%06d" % (tag, spec["index"]), pure=False): spec
-                   for spec in todo}
-        for future in as_completed(futures):
-            spec = futures.pop(future)
-            try:
-                result = future.result()
-            except Exception:  # the worker died under the flight (KilledWorker, ...)
-                result = {"index": spec["index"], "spec": spec, "status": "error",
-                          "traceback": traceback.format_exc()}
-            store.put(result)
-            counts["flown"] += 1
-            counts["failed"] += result["status"] != "ok" or not result["summary"]["success"]
-            if progress is not None:
-                progress(counts["flown"], len(todo), counts["failed"], time.monotonic() - started)
+        fly_on(client, todo, on_result, key_prefix="flight-%d-%d" % (os.getpid(), store.run or 0))
     finally:
         client.close()
         if cluster is not None:
