@@ -29,7 +29,6 @@ import threading
 import time
 
 from crazyflie_app.firmware import v_task_delay
-from host_tools import fileio
 from host_tools.errors import ForaNavError
 from host_tools.flight import harness
 from host_tools.maps import map_from_dict, map_to_dict

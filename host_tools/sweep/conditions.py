@@ -18,8 +18,6 @@ Camera defaults: sim 9 fps, one frame of latency, no added pixel noise (the rend
 noise); oracle 10 fps, 50 ms, 1.5 px. A preset can be narrowed or widened per condition with explicit
 ranges (``overrides``: name -> (lo, hi); estimator: the flow probability).
 """
-import math
-
 from host_tools.errors import ForaNavError
 
 FAULT_PRESETS = {
@@ -134,16 +132,3 @@ def harness_inputs(conditions, camera):
     cmd_fly.add_arguments(parser)
     args = parser.parse_args(["--map", "-", "--camera", camera] + fly_arguments(conditions))
     return cmd_fly.camera_kwargs(args), cmd_fly.flight_options(args)
-
-
-def describe(conditions):
-    """Short text of the conditions for tables."""
-    if not conditions:
-        return "none"
-    parts = []
-    for key in ("dropout", "pixel_noise_px", "frame_period_ms", "latency_ms", "wind_mps2", "estimator"):
-        if key in conditions:
-            parts.append("%s=%s" % (key, conditions[key]))
-    if "cam_offset_m" in conditions:
-        parts.append("offset=%.3f m" % math.hypot(*conditions["cam_offset_m"]))
-    return ", ".join(parts)

@@ -308,7 +308,7 @@ def _plot_rates(report, path):
         ax.bar(x, rates, yerr=err, color="#2e7d32", alpha=0.75, capsize=2)
         ax.set_xticks(list(x))
         ax.set_xticklabels([r["bin"] for r in table], fontsize=7)
-        ax.set_ylim(min([90.0] + [r - 5 for r in rates]), 100.5)
+        ax.set_ylim(max(0.0, min([90.0] + [100 * r["lo"] - 2 for r in table])), 100.5)
         ax.set_title(name, fontsize=9)
         ax.tick_params(axis="y", labelsize=7)
     for ax in list(axes.flat)[len(tables):]:
