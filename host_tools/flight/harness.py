@@ -119,11 +119,6 @@ def _options(options):
     return merged
 
 
-def flight_options(options=None):
-    """``options`` merged over DEFAULT_OPTIONS and checked (ForaNavError naming the bad option)."""
-    return _options(options)
-
-
 # -- the app: a component the flight is composed with -----------------------------------------------------------
 
 def _python_app(cf, waypoints, serial_url, target_label):
