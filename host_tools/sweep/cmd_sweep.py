@@ -125,9 +125,10 @@ def run(args):
             raise ForaNavError("--workers: only without --scheduler (the cluster has its own workers)")
         ranges = ranges_from_args(args)
         overrides = _overrides(args.condition)
-        preset(args.faults, overrides)  # bad ranges fail before anything is written
+        distributions = preset(args.faults, overrides)  # bad ranges fail before anything is written
         identity = {"seed": args.seed, "faults": args.faults, "camera": args.camera,
-                    "conditions": sorted(overrides.items()), "ranges": dataclasses.asdict(ranges)}
+                    "conditions": sorted(overrides.items()), "distributions": distributions,
+                    "ranges": dataclasses.asdict(ranges)}
         store = SweepStore(args.out)
         try:
             store.check_identity(identity)

@@ -9,10 +9,15 @@ estimator; values are rounded so the fly command carries them exactly):
     pixel_noise_px     camera default    U(0, 2)               U(1, 4)          detection centre noise (std)
     latency_ms         camera default    U(1, 2) frames        U(1, 3) frames   camera processing latency
     fps                camera default    U(6, 10)              U(4, 10)         camera frame rate
-    wind_mps2          0                 U(0, 0.3)             U(0.2, 0.8)      gust acceleration std
+    wind_mps2          0                 U(0, 0.1)             U(0.1, 0.4)      gust acceleration std
     estimator          uwb               P(flow) = 0.25        P(flow) = 0.5    uwb (biased) / flow (drifting)
     cam_offset_m       (0, 0)            U(-0.05, 0.05) each   U(-0.1, 0.1)     mount offset (fwd, left), known
                                                                                 to the app (app.camOffsetX/Y)
+
+Wind: with the oracle on Map 1 and no other fault, gusts of 0.05-0.15 m/s^2 are flown flawlessly (slower),
+0.2 and above make the app abandon targets (APPROACH never settles within settleRadius before its timeout);
+with the other moderate faults on random plantations misses start near 0.16 m/s^2. So moderate stays below
+that (U(0, 0.1)) and harsh covers it (U(0.1, 0.4)); see docs/sweeps.md.
 
 Camera defaults: sim 9 fps, one frame of latency, no added pixel noise (the rendered frames carry sensor
 noise); oracle 10 fps, 50 ms, 1.5 px. A preset can be narrowed or widened per condition with explicit
@@ -23,10 +28,10 @@ from host_tools.errors import ForaNavError
 FAULT_PRESETS = {
     "none": {},
     "moderate": {"dropout": (0.0, 0.2), "pixel_noise_px": (0.0, 2.0), "latency_frames": (1.0, 2.0),
-                 "fps": (6.0, 10.0), "wind_mps2": (0.0, 0.3), "flow_probability": 0.25,
+                 "fps": (6.0, 10.0), "wind_mps2": (0.0, 0.1), "flow_probability": 0.25,
                  "cam_offset_m": (-0.05, 0.05)},
     "harsh": {"dropout": (0.1, 0.4), "pixel_noise_px": (1.0, 4.0), "latency_frames": (1.0, 3.0),
-              "fps": (4.0, 10.0), "wind_mps2": (0.2, 0.8), "flow_probability": 0.5,
+              "fps": (4.0, 10.0), "wind_mps2": (0.1, 0.4), "flow_probability": 0.5,
               "cam_offset_m": (-0.1, 0.1)},
 }
 CONDITION_NAMES = ("dropout", "pixel_noise_px", "latency_frames", "fps", "wind_mps2", "flow_probability",
