@@ -131,6 +131,9 @@ def run_realtime(pmap, *, seed=0, speed=1.0, out_dir=None, options=None, kill_ca
     for key in UNSUPPORTED_OPTIONS:
         if options.get(key):
             raise ForaNavError("--realtime: option %s is a lockstep wire fault (not with --realtime)" % key)
+    if (camera_kwargs or {}).get("pixel_noise_px"):
+        # the module writes straight into the pty there: nothing between it and the wire to add noise
+        raise ForaNavError("--realtime: --pixel-noise is a lockstep fault (not with --realtime)")
     options["lockstep"] = False  # bytes arrive when the camera process sends them
     from host_tools.flight.vision_camera import DEFAULT_FRAME_PERIOD_MS, DEFAULT_LATENCY_FRAMES
 
