@@ -140,3 +140,15 @@ def test_that_vision_flights_in_a_row_in_one_process_leave_no_state_behind():
     a, b, a_again = _flown_in_a_row("sim", PlantationRanges(columns=(1, 1), column_length_m=(1.2, 1.2)))
     assert a["status"] == b["status"] == a_again["status"] == "ok"
     assert a["summary"] == a_again["summary"] and a["summary"] != b["summary"]
+
+
+def test_that_the_progress_bar_shows_flights_done_rate_and_eta():
+    import io
+    from host_tools.sweep.cmd_sweep import ProgressBar
+    stream = io.StringIO()
+    bar = ProgressBar(total=12, skipped=2, stream=stream)  # 10 to fly, 2 already stored
+    bar(4, 10, 1, 8.0)  # 4 flown in 8 s: 0.5 flights/s, 6 left: 12 s
+    bar(10, 10, 1, 20.0)
+    first, last = stream.getvalue().splitlines()
+    assert "6/12 flights" in first and "0.50 flights/s" in first and "ETA 0m12s" in first and "1 not flawless" in first
+    assert "12/12 flights" in last and "ETA 0m00s" in last
