@@ -29,6 +29,8 @@ COMMANDS = {
     "fly": ("host_tools.flight.cmd_fly", "fly a map with the Crazyflie app on the emulated firmware"),
     "paper-tests": ("host_tools.flight.cmd_paper_tests", "run the paper's flight Tests 1-9"),
     "replay": ("host_tools.flight.cmd_replay", "replay a recorded clip through both halves"),
+    "plantation": ("host_tools.cmd_plantation", "write a random plantation map (columns, gaps, look-alikes, ...)"),
+    "sweep": ("host_tools.sweep.cmd_sweep", "fly thousands of random plantations on Dask; store, report"),
     "bench": ("host_tools.cmd_bench", "benchmarks: foranav bench {sim,detector,flight}"),
     "deploy": ("host_tools.deploy.cmd_deploy", "install the camera module on a JeVois microSD card"),
     "package": ("host_tools.deploy.cmd_package", "build a .jvpkg package of the camera module"),

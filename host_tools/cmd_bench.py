@@ -1,9 +1,10 @@
-"""Benchmarks that print figures: foranav bench {sim,detector,flight} [--json].
+"""Benchmarks that print figures: foranav bench {sim,detector,flight,sweep} [--json].
 
 sim:      rendered 352x288 camera frames per second on one core (plantation simulator).
 flight:   simulated seconds per CPU second of an oracle flight (firmware emulation + app).
 detector: ms per frame and FPS of the tree detector at 352x288, 640x480 and 1280x1024, peak memory, and the
           speed-up over the per-window reference implementation.
+sweep:    flights per CPU-second and the 1 -> 2 Dask worker speed-up (--camera sim|oracle, --count N).
 """
 import importlib
 
@@ -13,6 +14,7 @@ TARGETS = {
     "sim": "host_tools.sim.bench",
     "detector": "host_tools.detection.bench",
     "flight": "host_tools.flight.bench",
+    "sweep": "host_tools.sweep.bench",
 }
 
 
@@ -20,6 +22,9 @@ def add_arguments(parser):
     parser.add_argument("target", choices=sorted(TARGETS), help="what to benchmark")
     parser.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
     parser.add_argument("--seed", type=argtypes.seed, default=0, help="seed of the rendered test frames")
+    parser.add_argument("--camera", choices=("sim", "oracle"), default=None, help="sweep: camera (default sim)")
+    parser.add_argument("--count", type=argtypes.int_range(1, 100000), default=None,
+                        help="sweep: flights per worker count (default 6)")
 
 
 def run(args):

@@ -30,10 +30,10 @@ def test_that_fly_defaults_to_a_runs_folder_and_prints_a_table(tmp_path, capsys,
     assert (tmp_path / "runs" / "fly-map2-seed0" / "flight.tlog").exists()
 
 
-def test_that_sim_only_options_with_the_oracle_fail_in_one_line(capsys):
-    assert cli.main(["fly", "--map", "map1", "--camera", "oracle", "--fps", "9"]) == 2
+def test_that_realtime_only_options_without_realtime_fail_in_one_line(capsys):
+    assert cli.main(["fly", "--map", "map1", "--camera", "oracle", "--kill-camera-at", "9"]) == 2
     err = capsys.readouterr().err
-    assert "--fps" in err and len(err.strip().splitlines()) == 1
+    assert "--kill-camera-at" in err and len(err.strip().splitlines()) == 1
 
 
 def test_that_bad_arguments_fail_in_one_line_and_write_nothing(tmp_path, capsys):

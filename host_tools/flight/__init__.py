@@ -6,6 +6,7 @@ Stable interface for the flight commands::
     summary = run_flight(pmap, OracleCamera(pmap, seed=0), seed=0, out_dir="runs/x", options={"dropout": 0.3})
 """
 from host_tools.flight.harness import DEFAULT_OPTIONS, camera_factory, register_camera, run_flight  # noqa: F401
+from host_tools.flight.harness import fly, register_app  # noqa: F401
 from host_tools.flight.oracle import OracleCamera  # noqa: F401
 
 

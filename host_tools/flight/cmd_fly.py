@@ -52,11 +52,11 @@ def add_arguments(parser):
     parser.add_argument("--hide-s", type=argtypes.nonnegative, default=5.0,
                         help="... for this many seconds from when the app first approaches it (default 5)")
     parser.add_argument("--pixel-noise", type=argtypes.float_range(0.0, 1000.0), default=None,
-                        help="oracle: pixel noise std (px)")
+                        help="detection centre noise std (px; default oracle 1.5, sim 0 on top of sensor noise)")
     parser.add_argument("--latency-ms", type=argtypes.int_range(0, LATENCY_MAX_MS), default=None,
                         help="camera latency (ms; default sim: one frame, oracle: 50)")
     parser.add_argument("--fps", type=argtypes.float_range(*FPS_RANGE), default=None,
-                        help="sim: camera frame rate, %g-%g (default 9, the paper)" % FPS_RANGE)
+                        help="camera frame rate, %g-%g (default sim 9, the paper; oracle 10)" % FPS_RANGE)
     parser.add_argument("--silence", action="append", default=[], metavar="START:DURATION",
                         help="fault: nothing reaches the wire from START for DURATION seconds (repeatable)")
     parser.add_argument("--garbage-rate", type=argtypes.probability, default=0.0,
@@ -115,12 +115,10 @@ def _window(text):
 def _camera_kwargs(args):
     kwargs = {}
     if args.fps is not None:
-        if args.camera != "sim" or not args.fps > 0:
-            raise ForaNavError("--fps: a positive frame rate, with --camera sim")
+        if not args.fps > 0:
+            raise ForaNavError("--fps: must be a positive frame rate")
         kwargs["frame_period_ms"] = int(round(1000.0 / args.fps))
     if args.pixel_noise is not None:
-        if args.camera != "oracle":
-            raise ForaNavError("--pixel-noise: only with --camera oracle (the sim camera has sensor noise)")
         if args.pixel_noise < 0:
             raise ForaNavError("--pixel-noise: must not be negative")
         kwargs["pixel_noise_px"] = args.pixel_noise
@@ -131,6 +129,16 @@ def _camera_kwargs(args):
     if args.cam_offset is not None:
         kwargs["mount_offset"] = tuple(args.cam_offset)
     return kwargs
+
+
+def flight_options(args):
+    """The harness options of parsed fly arguments (sweeps build their flights with it)."""
+    return _options(args)
+
+
+def camera_kwargs(args):
+    """The camera factory's keyword arguments of parsed fly arguments (sweeps build their flights with it)."""
+    return _camera_kwargs(args)
 
 
 def print_table(summary, out=None):

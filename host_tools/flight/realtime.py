@@ -29,7 +29,6 @@ import threading
 import time
 
 from crazyflie_app.firmware import v_task_delay
-from host_tools import fileio
 from host_tools.errors import ForaNavError
 from host_tools.flight import harness
 from host_tools.maps import map_from_dict, map_to_dict
@@ -48,38 +47,38 @@ class _CameraSpec(object):
         self.frame_period_ms, self.latency_ms = int(frame_period_ms), int(latency_ms)
 
 
-class _RealtimeFlight(harness._Flight):
-    """The harness flight with the camera task replaced by wall-clock pacing and the pose feed."""
+class _RealtimePacer(object):
+    """The realtime world task: paces simulated time to the wall clock and feeds the camera process poses."""
 
-    def __init__(self, pmap, spec, seed, out_dir, options, progress, speed, kill_camera_at_s):
-        super().__init__(pmap, spec, seed, out_dir, options, progress)
+    def __init__(self, flight, speed, kill_camera_at_s):
+        self.flight = flight
         self.speed = float(speed)
         self.kill_camera_at_ms = None if kill_camera_at_s is None else int(float(kill_camera_at_s) * 1000)
         self.camera_process = None
-        self.camera_killed_ms = None
         self.wall0 = None
         self.max_lag_s = 0.0
 
-    def world_task(self):
+    def task(self):
+        rig, flight = self.flight.rig, self.flight
         while True:
-            now = self._now()
+            now = rig.now()
             if self.wall0 is None:
                 self.wall0 = time.monotonic()
             lag = time.monotonic() - (self.wall0 + now / 1000.0 / self.speed)
             if lag < 0:
                 time.sleep(-lag)
             self.max_lag_s = max(self.max_lag_s, lag)
-            self._maybe_start_hiding(now)
-            if self.kill_camera_at_ms is not None and now >= self.kill_camera_at_ms and self.camera_killed_ms is None:
+            flight.hide.update(now)
+            if self.kill_camera_at_ms is not None and now >= self.kill_camera_at_ms and flight.camera_killed_ms is None:
                 self.camera_process.kill()
-                self.camera_killed_ms = now
-            elif self.camera_killed_ms is None:
+                flight.camera_killed_ms = now
+            elif flight.camera_killed_ms is None:
                 self._send_pose(now)
             yield v_task_delay(POSE_PERIOD_MS)
 
     def _send_pose(self, now):
-        x, y, z, yaw = self.true_pose()
-        hidden = ",".join(str(i) for i in sorted(self.hidden_ids(now)))
+        x, y, z, yaw = self.flight.rig.true_pose()
+        hidden = ",".join(str(i) for i in sorted(self.flight.hide.hidden_ids(now)))
         try:
             self.camera_process.stdin.write(("%d %.5f %.5f %.5f %.4f %s\n" % (now, x, y, z, yaw, hidden)).encode())
             self.camera_process.stdin.flush()
@@ -133,49 +132,48 @@ def run_realtime(pmap, *, seed=0, speed=1.0, out_dir=None, options=None, kill_ca
     for key in UNSUPPORTED_OPTIONS:
         if options.get(key):
             raise ForaNavError("--realtime: option %s is a lockstep wire fault (not with --realtime)" % key)
+    if (camera_kwargs or {}).get("pixel_noise_px"):
+        # the module writes straight into the pty there: nothing between it and the wire to add noise
+        raise ForaNavError("--realtime: --pixel-noise is a lockstep fault (not with --realtime)")
     options["lockstep"] = False  # bytes arrive when the camera process sends them
-    opts = harness._options(options)
     from host_tools.flight.vision_camera import DEFAULT_FRAME_PERIOD_MS, DEFAULT_LATENCY_FRAMES
 
     kwargs = dict(camera_kwargs or {})
     period = int(kwargs.get("frame_period_ms", DEFAULT_FRAME_PERIOD_MS))
     latency = kwargs.get("latency_ms")
     latency = DEFAULT_LATENCY_FRAMES * period if latency is None else int(latency)
-    flight = _RealtimeFlight(pmap, _CameraSpec(period, latency), seed, out_dir, opts, progress, speed,
-                             kill_camera_at_s)
+    flight = harness.Flight(pmap, _CameraSpec(period, latency), seed=seed, out_dir=out_dir, options=options,
+                            progress=progress)
+    pacer = _RealtimePacer(flight, speed, kill_camera_at_s)
     report = None
     started = time.monotonic()
     try:
-        flight.camera_process = _start_camera_process(pmap, flight.wire.master_fd, speed, seed, kwargs)
-        flight.run()
+        pacer.camera_process = _start_camera_process(pmap, flight.rig.wire.master_fd, speed, seed, kwargs)
+        flight.run(pacer.task())
     except BaseException:
-        if flight.camera_process is not None and flight.camera_process.poll() is None:
-            flight.camera_process.kill()
-            flight.camera_process.wait()
+        if pacer.camera_process is not None and pacer.camera_process.poll() is None:
+            pacer.camera_process.kill()
+            pacer.camera_process.wait()
         flight.close(keep=False)
         raise
     finally:
-        if flight.camera_process is not None:
-            report = _stop_camera_process(flight.camera_process)
+        if pacer.camera_process is not None:
+            report = _stop_camera_process(pacer.camera_process)
     wall = time.monotonic() - started
     flight.close(keep=True)
     summary = flight.summary()
     summary["cpu_s"] = round(flight.cpu_s, 2)
-    if report is not None and flight.done_ms:
+    done_ms = flight.record.done_ms
+    if report is not None and done_ms:
         # frames that reached the app per simulated second: below the nominal rate when the host lags
-        report["effective_fps"] = round(report["frames"] / (flight.done_ms / 1000.0), 2)
+        report["effective_fps"] = round(report["frames"] / (done_ms / 1000.0), 2)
     summary["vision"] = report
-    summary["realtime"] = {"speed": speed, "wall_s": round(wall, 2), "max_lag_s": round(flight.max_lag_s, 3),
+    summary["realtime"] = {"speed": speed, "wall_s": round(wall, 2), "max_lag_s": round(pacer.max_lag_s, 3),
                            "camera_killed_at_s": None if flight.camera_killed_ms is None
                            else flight.camera_killed_ms / 1000.0}
     summary["after_camera_loss"] = _after_camera_loss(flight)
     if flight.out_dir is not None:
-        from host_tools.flight.plot import plot_trajectory
-        summary["tlog"] = str(flight.out_dir / "flight.tlog")
-        summary["plot"] = str(flight.out_dir / "trajectory.png")
-        summary["summary"] = str(flight.out_dir / "summary.json")
-        plot_trajectory(flight, summary["plot"])
-        fileio.write_json(summary["summary"], {k: v for k, v in summary.items() if k != "cpu_s"})
+        flight.write_outputs(summary)
     return summary
 
 
@@ -188,10 +186,11 @@ def _after_camera_loss(flight):
         return None
     x0, y0 = after[0]
     farthest = max(((x - x0) ** 2 + (y - y0) ** 2) ** 0.5 for x, y in after)
-    truth = flight.cf.model.truth
+    cf = flight.rig.cf
+    truth = cf.model.truth
     return {"max_distance_m": round(farthest, 3), "final_height_m": round(truth.z, 3),
-            "landed": flight.cf.supervisor.state in ("LANDED", "LOCKED") or truth.z < 0.05,
-            "supervisor": str(flight.cf.supervisor.state), "phase": flight.app.phase}
+            "landed": cf.supervisor.state in ("LANDED", "LOCKED") or truth.z < 0.05,
+            "supervisor": str(cf.supervisor.state), "phase": flight.rig.app.phase}
 
 
 # -- the camera process -------------------------------------------------------------------------------------------

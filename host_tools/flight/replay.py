@@ -61,63 +61,63 @@ class _PlaybackModel(object):
         self.pose_at(self._clock())
 
 
-class _ReplayFlight(harness._Flight):
-    def __init__(self, pmap, clip, spec, seed, options):
-        super().__init__(pmap, spec, seed, None, options, None)
-        self.clip = clip
+class _ClipPlayer(object):
+    """The replay's world task and taps: plays the clip's frames through the module into the flight's wire,
+    drives the MAV model from the recorded poses and samples the setpoints the app sends."""
+
+    def __init__(self, flight, clip):
+        self.flight, self.clip = flight, clip
+        self.rig = flight.rig
         self.clip_t0_ms = None
-        self.cf.model = _PlaybackModel(self.cf.model, clip.frames, self.playback_s)
+        self.rig.cf.model = _PlaybackModel(self.rig.cf.model, clip.frames, self.playback_s)
+        self.delivery = harness.Delivery(self.rig.wire)
         self.score = DetectionScore()
         self.frame_rows = []  # per frame: index, t_s, detections (world), truth counts
         self.setpoints = []  # (t_ms, phase, world vx, vy, z)
         self._last_setpoint_ms = None
-        self.cf.commander.listeners.append(self._record_setpoint)
+        self.rig.cf.commander.listeners.append(self._record_setpoint)
 
     def playback_s(self):
-        return 0.0 if self.clip_t0_ms is None else (self._now() - self.clip_t0_ms) / 1000.0
+        return 0.0 if self.clip_t0_ms is None else (self.rig.now() - self.clip_t0_ms) / 1000.0
 
     def _record_setpoint(self, sp, priority):
-        now = self._now()
+        now = self.rig.now()
         if self.clip_t0_ms is None or sp.is_null():
             return
         if self._last_setpoint_ms is not None and now - self._last_setpoint_ms < SETPOINT_SAMPLE_MS:
             return
         self._last_setpoint_ms = now
-        yaw = self.cf.model.estimate.yaw
+        yaw = self.rig.cf.model.estimate.yaw
         vx, vy = rotate(yaw, sp.velocity.x, sp.velocity.y) if sp.velocity_body else (sp.velocity.x, sp.velocity.y)
-        self.setpoints.append((now - self.clip_t0_ms, self.app.phase, vx, vy, sp.position.z))
+        self.setpoints.append((now - self.clip_t0_ms, self.rig.app.phase, vx, vy, sp.position.z))
 
-    def world_task(self):
-        while self.app.phase < PHASE_FOLLOW_PATH:
+    def task(self):
+        rig, camera = self.rig, self.flight.camera
+        while rig.app.phase < PHASE_FOLLOW_PATH:
             yield v_task_delay(POLL_MS)
-        self.clip_t0_ms = self._now()
-        camera = self.camera
+        self.clip_t0_ms = rig.now()
         width, height = self.clip.camera.width, self.clip.camera.height
+        target_species = self.flight.pmap.target_species
         for frame, image in zip(self.clip.frames, self.clip.images()):
             due = self.clip_t0_ms + int(round(frame.t_s * 1000))
-            while self._now() < due:
-                yield v_task_delay(due - self._now())
-            self._deliver_due()
+            while rig.now() < due:
+                yield v_task_delay(due - rig.now())
+            self.delivery.deliver_due(rig.now())
             lines = camera.runner.process_frame(image)
             pixels = parse_detections(lines, width, height)
             if frame.trees is not None:
-                self.score.add(due, pixels, truth_in_frame(frame.trees, self.pmap.target_species))
+                self.score.add(due, pixels, truth_in_frame(frame.trees, target_species))
             self.frame_rows.append({"index": frame.index, "t_s": frame.t_s, "detections": len(pixels),
                                     "truth": None if frame.trees is None else len(
-                                        truth_in_frame(frame.trees, self.pmap.target_species))})
+                                        truth_in_frame(frame.trees, target_species))})
             data = b"".join(line.encode("ascii", "replace") + b"\r\n" for line in lines)
-            self._schedule(due + camera.latency_ms, data)
-        end = self._now() + camera.latency_ms + END_MARGIN_MS
-        while self._now() < end:
-            self._deliver_due()
+            self.delivery.schedule(due + camera.latency_ms, data)
+        end = rig.now() + camera.latency_ms + END_MARGIN_MS
+        while rig.now() < end:
+            self.delivery.deliver_due(rig.now())
             yield v_task_delay(POLL_MS)
-        self.cf.scheduler.stop()
+        rig.cf.scheduler.stop()
         yield v_task_delay(POLL_MS)
-
-    def _deliver_due(self):
-        import heapq
-        while self._pending and self._pending[0][0] <= self._now():
-            self.wire.write(heapq.heappop(self._pending)[2])
 
 
 class _ClipCamera(object):
@@ -151,20 +151,22 @@ def replay_clip(clip, pmap=None, *, latency_ms=None, seed=0, params=None):
     options = {"start": (first.x, first.y), "max_time_s": last_s + 60.0,
                "params": {"app.camWaitMs": 0, **(params or {})}}
     camera = _ClipCamera(clip, pmap, latency_ms)
-    flight = _ReplayFlight(pmap, clip, camera, seed, harness._options(options))
-    flight.app.params.altitude_m = first.z  # the app flies at the recorded height
+    flight = harness.Flight(pmap, camera, seed=seed, options=options)
+    player = _ClipPlayer(flight, clip)
+    flight.rig.app.params.altitude_m = first.z  # the app flies at the recorded height
     try:
-        flight.run()
+        flight.run(player.task())
     finally:
         flight.close(keep=False)
-    if flight.clip_t0_ms is None:
+    if player.clip_t0_ms is None:
         raise ForaNavError("replay: the app never started to follow the path (phase %s)"
-                           % PHASE_NAMES[flight.app.phase])
-    return _report(flight, pmap, clip)
+                           % PHASE_NAMES[flight.rig.app.phase])
+    return _report(flight, player, pmap, clip)
 
 
-def _report(flight, pmap, clip):
-    memory = flight.app.core.memory
+def _report(flight, player, pmap, clip):
+    app = flight.rig.app
+    memory = app.core.memory
     stored = [(t.id, t.x, t.y) for t in _stored_trees(memory)]
     trees = []
     for tree_id, x, y in stored:
@@ -180,23 +182,23 @@ def _report(flight, pmap, clip):
     return {
         "clip": str(clip.directory),
         "map": pmap.name,
-        "frames": len(flight.frame_rows),
+        "frames": len(player.frame_rows),
         "duration_s": clip.frames[-1].t_s,
         "latency_ms": flight.camera.latency_ms,
-        "detection": flight.score.report() if flight.score.frames else None,
-        "per_frame": flight.frame_rows,
+        "detection": player.score.report() if player.score.frames else None,
+        "per_frame": player.frame_rows,
         "tree_map": trees,
         "tree_map_mean_error_m": round(sum(errors) / len(errors), 4) if errors else None,
         "tree_map_max_error_m": round(max(errors), 4) if errors else None,
         "trees_seen_whole": sorted(seen),
         "trees_seen_not_mapped": sorted(seen - mapped),
         "spurious_app_trees": sum(1 for t in trees if t["map_id"] is None),
-        "app_detections": flight.app.core.counters.detections,
-        "app_out_of_column": flight.app.core.counters.out_of_column,
+        "app_detections": app.core.counters.detections,
+        "app_out_of_column": app.core.counters.out_of_column,
         "setpoints": [{"t_s": round(t / 1000.0, 2), "phase": PHASE_NAMES[p], "vx": round(vx, 3), "vy": round(vy, 3),
-                       "z": round(z, 3)} for t, p, vx, vy, z in flight.setpoints],
-        "phases": _phase_durations(flight.setpoints),
-        "serial_bytes": flight.wire.bytes_written,
+                       "z": round(z, 3)} for t, p, vx, vy, z in player.setpoints],
+        "phases": _phase_durations(player.setpoints),
+        "serial_bytes": flight.rig.wire.bytes_written,
     }
 
 

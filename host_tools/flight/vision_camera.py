@@ -10,6 +10,9 @@ A hidden tree is really hidden: the frame is rendered from a second orthomosaic 
 tree (same ground, same lighting) and the pixels of its crown are pasted over the normal frame, so the module
 sees bare ground where the tree was (a temporary occlusion), not a filtered output.
 
+``pixel_noise_px`` (default 0) adds Gaussian jitter to the centres the module reports (a fault on top of
+the rendered sensor noise); frames are scored on what is sent.
+
 Every frame is scored against the simulator's ground truth (``DetectionScore``); ``report()`` gives the
 totals (detections per frame, true/false positives, misses, pixel error) for the flight summary.
 """
@@ -117,11 +120,13 @@ class VisionCamera(object):
 
     def __init__(self, pmap, *, seed=0, frame_period_ms=DEFAULT_FRAME_PERIOD_MS, latency_ms=None,
                  effects=DEFAULT_EFFECTS, width=352, height=288, mount_offset=(0.0, 0.0), module_params=None,
-                 world=None, serial_stream=None, log_stream=None):
+                 world=None, serial_stream=None, log_stream=None, pixel_noise_px=0.0):
         if frame_period_ms <= 0:
             raise ValueError("frame_period_ms must be > 0, got %r" % frame_period_ms)
         if latency_ms is not None and latency_ms < 0:
             raise ValueError("latency_ms must be >= 0, got %r" % latency_ms)
+        if not pixel_noise_px >= 0:
+            raise ValueError("pixel_noise_px must be >= 0, got %r" % pixel_noise_px)
         if effects not in EFFECTS:
             raise ValueError("effects must be one of %s, got %r" % (", ".join(sorted(EFFECTS)), effects))
         from host_tools.jevois_host import ModuleRunner  # loads the module the JeVois way
@@ -134,6 +139,8 @@ class VisionCamera(object):
         self.world = world if world is not None else World.from_map(pmap)
         self._hidden_worlds = {}
         self._rng = np.random.default_rng([int(seed) & 0xFFFFFFFF, 0xCA3])  # sensor noise, per flight seed
+        self.pixel_noise_px = float(pixel_noise_px)
+        self._jitter_rng = np.random.default_rng([int(seed) & 0xFFFFFFFF, 0x71D])  # its own stream: 0 = no change
         params = {"species": pmap.target_species}
         params.update(module_params or {})
         # the module's periodic timing log ("INF ForaNavTrees average ...") would interleave with the CLI output
@@ -179,11 +186,27 @@ class VisionCamera(object):
             # takes off only once it has heard the camera)
             return [foranav_serial.FRAME_START, foranav_serial.FRAME_STOP]
         frame = self.render(true_pose, hidden)
-        lines = self.process(frame.image)
+        lines = self._jitter(self.process(frame.image))
         self.last_frame = frame
         self.score.add(t_ms, parse_detections(lines, self.camera.width, self.camera.height),
                        truth_in_frame(frame.trees, self.pmap.target_species))
         return lines
+
+    def _jitter(self, lines):
+        """Fault: Gaussian noise of pixel_noise_px on each reported centre (detection jitter beyond the
+        module's own), re-encoded in the serial grammar; other lines pass unchanged."""
+        if self.pixel_noise_px <= 0:
+            return lines
+        out = []
+        w, h = self.camera.width, self.camera.height
+        for line in lines:
+            message = foranav_serial.parse_line(line)
+            if isinstance(message, foranav_serial.Target2D):
+                du, dv = self._jitter_rng.normal(0.0, self.pixel_noise_px, 2)
+                line = foranav_serial.format_t2(foranav_serial.std_to_img_x(message.x, w) + du,
+                                                foranav_serial.std_to_img_y(message.y, h) + dv, w, h)
+            out.append(line)
+        return out
 
     def frames_csv(self):
         """One row per frame: capture time, detections sent, trees that should be found, true/false positives."""
@@ -207,8 +230,6 @@ def fly_with_vision(pmap, *, seed=0, out_dir=None, options=None, progress=None, 
 
 
 def _sim(pmap, seed=0, **kwargs):
-    # fly's --pixel-noise belongs to the oracle; a rendered camera has its own (sensor) noise
-    kwargs.pop("pixel_noise_px", None)
     return VisionCamera(pmap, seed=seed, **kwargs)
 
 

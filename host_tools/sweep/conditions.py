@@ -1,0 +1,139 @@
+"""Flight conditions of a sweep: per flight, drawn from the distributions of a fault preset, and turned into
+exactly the options ``foranav fly`` takes (so every flight of a sweep replays with one fly command).
+
+Presets (every value drawn independently per flight; U(a, b) uniform, P(flow) the chance of the flow
+estimator; values are rounded so the fly command carries them exactly):
+
+    condition          none              moderate              harsh
+    dropout            0                 U(0, 0.2)             U(0.1, 0.4)      per detection, on the wire
+    pixel_noise_px     camera default    U(0, 2)               U(1, 4)          detection centre noise (std)
+    latency_ms         camera default    U(1, 2) frames        U(1, 3) frames   camera processing latency
+    fps                camera default    U(6, 10)              U(4, 10)         camera frame rate
+    wind_mps2          0                 U(0, 0.1)             U(0.1, 0.4)      gust acceleration std
+    estimator          uwb               P(flow) = 0.25        P(flow) = 0.5    uwb (biased) / flow (drifting)
+    cam_offset_m       (0, 0)            U(-0.05, 0.05) each   U(-0.1, 0.1)     mount offset (fwd, left), known
+                                                                                to the app (app.camOffsetX/Y)
+
+Wind: with the oracle on Map 1 and no other fault, gusts of 0.05-0.15 m/s^2 are flown flawlessly (slower),
+0.2 and above make the app abandon targets (APPROACH never settles within settleRadius before its timeout);
+with the other moderate faults on random plantations misses start near 0.16 m/s^2. So moderate stays below
+that (U(0, 0.1)) and harsh covers it (U(0.1, 0.4)); see docs/sweeps.md.
+
+Camera defaults: sim 9 fps, one frame of latency, no added pixel noise (the rendered frames carry sensor
+noise); oracle 10 fps, 50 ms, 1.5 px. A preset can be narrowed or widened per condition with explicit
+ranges (``overrides``: name -> (lo, hi); estimator: the flow probability).
+"""
+from host_tools.errors import ForaNavError
+
+FAULT_PRESETS = {
+    "none": {},
+    "moderate": {"dropout": (0.0, 0.2), "pixel_noise_px": (0.0, 2.0), "latency_frames": (1.0, 2.0),
+                 "fps": (6.0, 10.0), "wind_mps2": (0.0, 0.1), "flow_probability": 0.25,
+                 "cam_offset_m": (-0.05, 0.05)},
+    "harsh": {"dropout": (0.1, 0.4), "pixel_noise_px": (1.0, 4.0), "latency_frames": (1.0, 3.0),
+              "fps": (4.0, 10.0), "wind_mps2": (0.1, 0.4), "flow_probability": 0.5,
+              "cam_offset_m": (-0.1, 0.1)},
+}
+CONDITION_NAMES = ("dropout", "pixel_noise_px", "latency_frames", "fps", "wind_mps2", "flow_probability",
+                   "cam_offset_m")
+CAMERAS = ("sim", "oracle")
+
+
+def preset(name, overrides=None):
+    """The distributions of preset ``name`` with ``overrides`` applied (ForaNavError on a bad one)."""
+    if name not in FAULT_PRESETS:
+        raise ForaNavError("--faults: unknown preset %r (have %s)" % (name, ", ".join(FAULT_PRESETS)))
+    spec = dict(FAULT_PRESETS[name])
+    for key, value in (overrides or {}).items():
+        if key not in CONDITION_NAMES:
+            raise ForaNavError("--condition %s: unknown (known: %s)" % (key, ", ".join(CONDITION_NAMES)))
+        if key == "flow_probability":
+            if not 0.0 <= float(value) <= 1.0:
+                raise ForaNavError("--condition flow_probability: must be in [0, 1], got %r" % (value,))
+        elif len(value) != 2 or value[0] > value[1]:
+            raise ForaNavError("--condition %s: expected LO:HI with LO <= HI, got %r" % (key, value))
+        spec[key] = value
+    if "dropout" in spec and not 0.0 <= spec["dropout"][0] <= spec["dropout"][1] <= 1.0:
+        raise ForaNavError("--condition dropout: must lie in [0, 1]")
+    for key in ("pixel_noise_px", "wind_mps2"):
+        if key in spec and spec[key][0] < 0:
+            raise ForaNavError("--condition %s: must not be negative" % key)
+    if "fps" in spec and spec["fps"][0] <= 0 or "latency_frames" in spec and spec["latency_frames"][0] < 0:
+        raise ForaNavError("--condition fps must be positive, latency_frames not negative")
+    return spec
+
+
+def draw(rng, distributions, camera):
+    """One flight's conditions (a dict of plain values) from ``distributions`` (see ``preset``)."""
+    if camera not in CAMERAS:
+        raise ForaNavError("--camera %s: a sweep flies sim or oracle" % camera)
+    d = distributions
+    # draw every condition in a fixed order whatever the preset, so presets share one random sequence shape
+    values = {key: float(rng.random()) for key in CONDITION_NAMES}
+    offset_roll = (float(rng.random()), float(rng.random()))
+    out = {}
+    if "dropout" in d:
+        out["dropout"] = _scaled(values["dropout"], d["dropout"], 4)
+    if "pixel_noise_px" in d:
+        out["pixel_noise_px"] = _scaled(values["pixel_noise_px"], d["pixel_noise_px"], 3)
+    if "fps" in d:
+        fps = _scaled(values["fps"], d["fps"], 6)
+        out["frame_period_ms"] = int(round(1000.0 / fps))
+    if "latency_frames" in d:
+        period = out.get("frame_period_ms", _default_period(camera))
+        out["latency_ms"] = int(round(_scaled(values["latency_frames"], d["latency_frames"], 6) * period))
+    if "wind_mps2" in d:
+        out["wind_mps2"] = _scaled(values["wind_mps2"], d["wind_mps2"], 3)
+    if "flow_probability" in d:
+        out["estimator"] = "flow" if values["flow_probability"] < float(d["flow_probability"]) else "uwb"
+    if "cam_offset_m" in d:
+        out["cam_offset_m"] = [_scaled(offset_roll[0], d["cam_offset_m"], 4),
+                               _scaled(offset_roll[1], d["cam_offset_m"], 4)]
+    return out
+
+
+def _scaled(unit, lo_hi, digits):
+    lo, hi = lo_hi
+    return round(lo + unit * (hi - lo), digits)
+
+
+def _default_period(camera):
+    if camera == "sim":
+        from host_tools.flight.vision_camera import DEFAULT_FRAME_PERIOD_MS
+        return DEFAULT_FRAME_PERIOD_MS
+    from host_tools.flight.oracle import DEFAULT_FRAME_PERIOD_MS
+    return DEFAULT_FRAME_PERIOD_MS
+
+
+def fly_arguments(conditions):
+    """The ``foranav fly`` options that reproduce ``conditions`` (list of strings, in a fixed order)."""
+    args = []
+    if conditions.get("dropout"):
+        args += ["--dropout", repr(conditions["dropout"])]
+    if "pixel_noise_px" in conditions:
+        args += ["--pixel-noise", repr(conditions["pixel_noise_px"])]
+    if "latency_ms" in conditions:
+        args += ["--latency-ms", str(conditions["latency_ms"])]
+    if "frame_period_ms" in conditions:
+        # fly rounds 1000 / fps to whole milliseconds: this fps gives back the same period
+        args += ["--fps", repr(1000.0 / conditions["frame_period_ms"])]
+    if conditions.get("estimator", "uwb") != "uwb":
+        args += ["--estimator", conditions["estimator"]]
+    if conditions.get("wind_mps2"):
+        args += ["--wind", repr(conditions["wind_mps2"])]
+    if "cam_offset_m" in conditions:
+        args += ["--cam-offset", repr(conditions["cam_offset_m"][0]), repr(conditions["cam_offset_m"][1])]
+    return args
+
+
+def harness_inputs(conditions, camera):
+    """(camera_kwargs, options) for harness.fly, built by ``foranav fly``'s own option code from
+    ``fly_arguments(conditions)``: one definition, so the replay command flies exactly the same flight."""
+    import argparse
+
+    from host_tools.flight import cmd_fly
+
+    parser = argparse.ArgumentParser(prog="foranav fly")
+    cmd_fly.add_arguments(parser)
+    args = parser.parse_args(["--map", "-", "--camera", camera] + fly_arguments(conditions))
+    return cmd_fly.camera_kwargs(args), cmd_fly.flight_options(args)

@@ -1,0 +1,320 @@
+"""The sweep report: flawless rate with a 95 % Wilson interval, failure taxonomy, deviation distribution,
+rates by factor and the worst flights with the fly command that replays each.
+
+    build_report(rows, out_dir) -> report dict;  write_report(report, rows, out_dir) -> report.md + PNGs
+
+A flight is flawless when the harness calls it a success: every target reached exactly once, no non-target
+visited, nothing "reached" where there is no tree, no watchdog event, mission completed. Failure classes
+(a flight can be in several): crash (the flight raised: traceback stored), not completed, missed target,
+repeated target, non-target visited, reached nothing (a reach 0.3 m from every tree), watchdog.
+"""
+import math
+from pathlib import Path
+
+from host_tools import fileio
+from host_tools.sweep.specs import fly_command, plantation_command
+
+Z95 = 1.959964
+WORST_SHOWN = 10
+FAILURE_CLASSES = ("crash", "not completed", "missed target", "repeated target", "non-target visited",
+                   "reached nothing", "watchdog")
+# factor -> (where it lives, bin edges or None for categories)
+FACTORS = {
+    "altitude_m": ("factors", (1.0, 1.125, 1.25, 1.375, 1.5001)),
+    "columns": ("factors", None),
+    "tree_spacing_m": ("factors", (0.45, 0.52, 0.59, 0.6501)),
+    "lateral_jitter_m": ("factors", (0.0, 0.04, 0.08, 0.1201)),
+    "clusters": ("factors", "any"),
+    "gaps": ("factors", "any"),
+    "lookalikes_in_column": ("factors", "any"),
+    "lookalikes_beside": ("factors", "any"),
+    "off_column_palms": ("factors", "any"),
+    "roofs": ("factors", "any"),
+    "road_crossings": ("factors", "any"),
+    "dropout": ("conditions", (0.0, 0.1, 0.2, 0.3, 0.4001)),
+    "pixel_noise_px": ("conditions", (0.0, 1.0, 2.0, 3.0, 4.0001)),
+    "frame_period_ms": ("conditions", (90, 125, 167, 251)),
+    "latency_ms": ("conditions", (0, 150, 300, 750)),
+    "wind_mps2": ("conditions", (0.0, 0.2, 0.4, 0.8001)),
+    "estimator": ("conditions", None),
+    "cam_offset_m": ("conditions", (0.0, 0.04, 0.08, 0.1501)),
+}
+
+
+def wilson(successes, n, z=Z95):
+    """Wilson score interval (lo, hi) of a binomial proportion; (None, None) for n = 0."""
+    if n == 0:
+        return None, None
+    p = successes / n
+    denom = 1 + z * z / n
+    centre = (p + z * z / (2 * n)) / denom
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / denom
+    return max(0.0, centre - half), min(1.0, centre + half)
+
+
+def failure_classes(row):
+    """The failure classes of one stored flight (empty for a flawless one)."""
+    if row["status"] != "ok":
+        return ["crash"]
+    s = row["summary"]
+    out = []
+    if not s["completed"]:
+        out.append("not completed")
+    if s["missed_targets"]:
+        out.append("missed target")
+    if s["repeated_targets"]:
+        out.append("repeated target")
+    if s["non_targets_visited"]:
+        out.append("non-target visited")
+    if s["spurious_reached"]:
+        out.append("reached nothing")
+    if s["watchdog_events"]:
+        out.append("watchdog")
+    if not out and not s["success"]:
+        out.append("not completed")
+    return out
+
+
+def flawless(row):
+    return row["status"] == "ok" and bool(row["summary"]["success"])
+
+
+def _factor_value(row, name):
+    where, _ = FACTORS[name]
+    source = row["spec"][where]
+    if name == "cam_offset_m":
+        value = source.get(name)
+        return None if value is None else math.hypot(*value)
+    return source.get(name)
+
+
+def _bin_label(value, edges):
+    if edges is None:
+        return str(value)
+    if edges == "any":
+        return "0" if not value else ">= 1"
+    for lo, hi in zip(edges[:-1], edges[1:]):
+        if lo <= value < hi:
+            return "%g-%g" % (lo, round(hi, 3))
+    return ">= %g" % edges[-1] if value >= edges[-1] else "< %g" % edges[0]
+
+
+def rates_by_factor(rows):
+    """{factor: [{bin, flights, flawless, rate, lo, hi}]} for every factor that varies in ``rows``."""
+    out = {}
+    for name, (_, edges) in FACTORS.items():
+        groups = {}
+        for row in rows:
+            value = _factor_value(row, name)
+            if value is None:
+                continue
+            groups.setdefault(_bin_label(value, edges), []).append(flawless(row))
+        if len(groups) < 2:
+            continue
+        table = []
+        for label in sorted(groups, key=_sort_key):
+            ok = groups[label]
+            lo, hi = wilson(sum(ok), len(ok))
+            table.append({"bin": label, "flights": len(ok), "flawless": sum(ok),
+                          "rate": round(sum(ok) / len(ok), 4), "lo": round(lo, 4), "hi": round(hi, 4)})
+        out[name] = table
+    return out
+
+
+def _sort_key(label):
+    head = label.replace(">= ", "").replace("< ", "").split("-")[0]
+    try:
+        return (0, float(head))
+    except ValueError:
+        return (1, label)
+
+
+def _quantiles(values, qs=(0.5, 0.9, 0.95, 0.99)):
+    if not values:
+        return {}
+    ordered = sorted(values)
+    out = {}
+    for q in qs:
+        pos = q * (len(ordered) - 1)
+        lo, hi = int(math.floor(pos)), int(math.ceil(pos))
+        out["p%d" % round(q * 100)] = round(ordered[lo] + (ordered[hi] - ordered[lo]) * (pos - lo), 4)
+    return out
+
+
+def _badness(row):
+    """Sort key of the worst flights: crashes, then failures by number of classes, then max deviation."""
+    classes = failure_classes(row)
+    s = row["summary"] or {}
+    return (row["status"] != "ok", len(classes), s.get("max_deviation_m") or 0.0)
+
+
+def build_report(rows, out_dir, identity=None, ranges=None):
+    out_dir = Path(out_dir)
+    n = len(rows)
+    ok = sum(1 for r in rows if flawless(r))
+    lo, hi = wilson(ok, n)
+    taxonomy = {name: 0 for name in FAILURE_CLASSES}
+    for row in rows:
+        for name in failure_classes(row):
+            taxonomy[name] += 1
+    deviations = [reach["deviation_m"] for r in rows if r["status"] == "ok"
+                  for reach in r["summary"]["reached"] if reach["id"] in set(r["summary"]["targets"])]
+    flight_means = [r["summary"]["mean_deviation_m"] for r in rows
+                    if r["status"] == "ok" and r["summary"]["mean_deviation_m"] is not None]
+    cpu = [r["cpu_s"] for r in rows if r.get("cpu_s")]
+    worst = sorted((r for r in rows if not flawless(r)), key=_badness, reverse=True)[:WORST_SHOWN]
+    if len(worst) < WORST_SHOWN:  # fill with the flawless flights of largest deviation
+        rest = sorted((r for r in rows if flawless(r)), key=lambda r: r["summary"]["max_deviation_m"] or 0.0,
+                      reverse=True)
+        worst += rest[:WORST_SHOWN - len(worst)]
+    worst_rows = []
+    for row in worst:
+        map_path = out_dir / "maps" / ("flight-%05d.json" % row["index"])
+        s = row["summary"] or {}
+        worst_rows.append({
+            "index": row["index"], "seed": row["spec"]["seed"], "plantation_seed": row["spec"]["plantation_seed"],
+            "flawless": flawless(row), "failures": failure_classes(row),
+            "missed": s.get("missed_targets"), "repeated": s.get("repeated_targets"),
+            "non_targets": s.get("non_targets_visited"), "max_deviation_m": s.get("max_deviation_m"),
+            "altitude_m": row["spec"]["factors"]["altitude_m"], "conditions": row["spec"]["conditions"],
+            "map": str(map_path), "fly": fly_command(row["spec"], map_path),
+            "plantation": plantation_command(row["spec"], map_path, ranges),
+            "error": (row["traceback"] or "").strip().splitlines()[-1] if row["status"] != "ok" else None})
+    return {
+        "sweep": identity or {},
+        "flights": n,
+        "flawless": ok,
+        "flawless_rate": round(ok / n, 4) if n else None,
+        "wilson95": [None if lo is None else round(lo, 4), None if hi is None else round(hi, 4)],
+        "failures": taxonomy,
+        "deviation_m": {"reaches": len(deviations),
+                        "mean": round(sum(deviations) / len(deviations), 4) if deviations else None,
+                        "max": max(deviations) if deviations else None, **_quantiles(deviations)},
+        "mean_of_flight_means_m": round(sum(flight_means) / len(flight_means), 4) if flight_means else None,
+        "cpu_s_per_flight": round(sum(cpu) / len(cpu), 2) if cpu else None,
+        "rates_by_factor": rates_by_factor(rows),
+        "worst": worst_rows,
+    }
+
+
+def write_report(report, rows, out_dir):
+    """report.md, deviations.png, rates.png and the worst flights' maps under out_dir/maps/."""
+    out_dir = Path(out_dir)
+    by_index = {r["index"]: r for r in rows}
+    for w in report["worst"]:
+        fileio.write_json(w["map"], by_index[w["index"]]["spec"]["map"])
+    _plot_deviations(rows, out_dir / "deviations.png")
+    _plot_rates(report, out_dir / "rates.png")
+    fileio.write_text(out_dir / "report.md", markdown(report))
+
+
+def headline(report):
+    """The headline table (markdown) of a report."""
+    lo, hi = report["wilson95"]
+    dev = report["deviation_m"]
+    sweep = report["sweep"]
+    lines = ["| flights | camera | faults | flawless | rate | 95 % Wilson | mean deviation (m) | p95 (m) | max (m) |",
+             "|---|---|---|---|---|---|---|---|---|",
+             "| %d | %s | %s | %d | %s | %s | %s | %s | %s |" % (
+                 report["flights"], sweep.get("camera", "?"), sweep.get("faults", "?"), report["flawless"],
+                 _pct(report["flawless_rate"]), "-" if lo is None else "%s - %s" % (_pct(lo), _pct(hi)),
+                 _num(dev.get("mean")), _num(dev.get("p95")), _num(dev.get("max")))]
+    return "\n".join(lines)
+
+
+def _pct(x):
+    return "-" if x is None else "%.1f %%" % (100 * x)
+
+
+def _num(x):
+    return "-" if x is None else "%.3f" % x
+
+
+def markdown(report):
+    out = ["# Sweep report", ""]
+    sweep = report["sweep"]
+    if sweep:
+        out += ["Sweep: " + ", ".join("%s %s" % (k, v) for k, v in sorted(sweep.items())), ""]
+    out += [headline(report), ""]
+    out += ["Mean of the per-flight mean deviations: %s m; CPU per flight: %s s." % (
+        _num(report["mean_of_flight_means_m"]), report["cpu_s_per_flight"]), ""]
+    out += ["## Failure taxonomy", "", "| class | flights |", "|---|---|"]
+    out += ["| %s | %d |" % (name, count) for name, count in report["failures"].items()]
+    dev = report["deviation_m"]
+    out += ["", "## Deviation at each target reached", "",
+            "%d reaches: mean %s m, median %s, p90 %s, p95 %s, p99 %s, max %s (deviations.png)." % (
+                dev["reaches"], _num(dev.get("mean")), _num(dev.get("p50")), _num(dev.get("p90")),
+                _num(dev.get("p95")), _num(dev.get("p99")), _num(dev.get("max"))),
+            "", "![deviations](deviations.png)", "", "## Flawless rate by factor", "", "![rates](rates.png)", ""]
+    for name, table in report["rates_by_factor"].items():
+        out += ["**%s**" % name, "", "| bin | flights | flawless | rate (95 % Wilson) |", "|---|---|---|---|"]
+        out += ["| %s | %d | %d | %s (%s - %s) |" % (r["bin"], r["flights"], r["flawless"], _pct(r["rate"]),
+                                                     _pct(r["lo"]), _pct(r["hi"])) for r in table]
+        out.append("")
+    out += ["## Worst flights", "", "Each replays with its fly command (the map is written next to this "
+            "report; the plantation command writes it again).", ""]
+    for w in report["worst"]:
+        what = "flawless" if w["flawless"] else ", ".join(w["failures"])
+        detail = []
+        if w["missed"]:
+            detail.append("missed %s" % w["missed"])
+        if w["repeated"]:
+            detail.append("repeated %s" % w["repeated"])
+        if w["non_targets"]:
+            detail.append("non-targets %s" % w["non_targets"])
+        if w["error"]:
+            detail.append(w["error"])
+        out += ["- flight %d (%s%s; max deviation %s m, altitude %.2f m)" % (
+            w["index"], what, "; " + "; ".join(detail) if detail else "", _num(w["max_deviation_m"]),
+            w["altitude_m"]), "", "      %s" % w["fly"], "      %s" % w["plantation"], ""]
+    return "\n".join(out) + "\n"
+
+
+def _plot_deviations(rows, path):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    deviations = [reach["deviation_m"] for r in rows if r["status"] == "ok"
+                  for reach in r["summary"]["reached"] if reach["id"] in set(r["summary"]["targets"])]
+    fig, ax = plt.subplots(figsize=(6, 3.2), dpi=110)
+    if deviations:
+        ax.hist(deviations, bins=40, color="#1565c0", alpha=0.8)
+        ax.axvline(0.05, color="#d32f2f", linewidth=1, label="0.05 m")
+        ax.legend(fontsize=8)
+    ax.set_xlabel("deviation at the reached target (m)")
+    ax.set_ylabel("reaches")
+    ax.set_title("Deviation distribution (%d reaches, %d flights)" % (len(deviations), len(rows)), fontsize=10)
+    fig.tight_layout()
+    with fileio.atomic_path(path) as tmp:
+        fig.savefig(tmp)
+    plt.close(fig)
+
+
+def _plot_rates(report, path):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    tables = report["rates_by_factor"]
+    n = max(len(tables), 1)
+    cols = 3
+    rows_ = int(math.ceil(n / cols))
+    fig, axes = plt.subplots(rows_, cols, figsize=(10, 2.4 * rows_), dpi=100, squeeze=False)
+    for ax, (name, table) in zip(axes.flat, tables.items()):
+        x = range(len(table))
+        rates = [100 * r["rate"] for r in table]
+        err = [[100 * (r["rate"] - r["lo"]) for r in table], [100 * (r["hi"] - r["rate"]) for r in table]]
+        ax.bar(x, rates, yerr=err, color="#2e7d32", alpha=0.75, capsize=2)
+        ax.set_xticks(list(x))
+        ax.set_xticklabels([r["bin"] for r in table], fontsize=7)
+        ax.set_ylim(max(0.0, min([90.0] + [100 * r["lo"] - 2 for r in table])), 100.5)
+        ax.set_title(name, fontsize=9)
+        ax.tick_params(axis="y", labelsize=7)
+    for ax in list(axes.flat)[len(tables):]:
+        ax.axis("off")
+    fig.suptitle("Flawless rate (%) by factor, 95 % Wilson intervals", fontsize=10)
+    fig.tight_layout()
+    with fileio.atomic_path(path) as tmp:
+        fig.savefig(tmp)
+    plt.close(fig)

@@ -1,0 +1,102 @@
+"""Fly a sweep's flights on Dask (dask.distributed), one task per flight, storing each as it finishes.
+
+    run_sweep(specs, store, *, scheduler=None, workers=None, progress=None) -> counts dict
+
+With no ``scheduler`` a LocalCluster of ``workers`` single-threaded worker processes (default: one per core)
+is started and shut down after; with ``scheduler`` ('tcp://host:port') the tasks go to that running
+cluster. The task is ``fly_task(spec)``: it never raises (a flight that raises comes back with its
+traceback), so one bad flight never stops a sweep; a worker that dies is recorded the same way.
+"""
+import os
+import platform
+import time
+import traceback
+
+from host_tools.errors import ForaNavError
+
+
+def fly_task(spec):
+    """Fly one spec (a Dask task) -> result dict: index, spec, status, summary | traceback, cpu_s, wall_s."""
+    import cv2
+
+    from host_tools.flight.harness import fly
+    from host_tools.sweep.conditions import harness_inputs
+
+    # one OpenCV thread per worker process: the workers already fill the cores, and idle OpenCV threads
+    # spinning on a shared machine cost CPU; results do not depend on it
+    cv2.setNumThreads(1)
+
+    # process CPU: the renderer's OpenCV threads count too (a worker runs one task at a time)
+    wall0, cpu0 = time.perf_counter(), time.process_time()
+    result = {"index": spec["index"], "spec": spec, "worker": "%s:%d" % (platform.node(), os.getpid())}
+    try:
+        camera_kwargs, options = harness_inputs(spec["conditions"], spec["camera"])
+        summary = fly(spec["map"], camera=spec["camera"], camera_kwargs=camera_kwargs, options=options,
+                      seed=spec["seed"])
+        summary.pop("cpu_s", None)
+        result.update(status="ok", summary=summary)
+    except Exception:  # recorded, never raised: the sweep goes on
+        result.update(status="error", traceback=traceback.format_exc())
+    result.update(cpu_s=round(time.process_time() - cpu0, 3), wall_s=round(time.perf_counter() - wall0, 3))
+    return result
+
+
+def open_client(scheduler=None, workers=None):
+    """(client, cluster): a Client of the running cluster at ``scheduler``, or of a new LocalCluster of
+    ``workers`` single-threaded processes (cluster is then returned so the caller can close it)."""
+    try:
+        from dask.distributed import Client, LocalCluster
+    except ImportError:
+        raise ForaNavError("foranav sweep needs dask.distributed: pip install 'dask[distributed]'")
+    if scheduler:
+        try:
+            return Client(scheduler, timeout="20s"), None
+        except (OSError, TimeoutError) as err:
+            raise ForaNavError("--scheduler %s: cannot connect: %s" % (scheduler, err))
+    workers = workers or os.cpu_count() or 1
+    cluster = LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True,
+                           dashboard_address=":0", silence_logs=40)
+    return Client(cluster), cluster
+
+
+def fly_on(client, specs, on_result, key_prefix="flight"):
+    """Submit one task per spec; call ``on_result(result)`` as each finishes (any order)."""
+    from dask.distributed import as_completed
+
+    futures = {client.submit(fly_task, spec, key="%s-%06d" % (key_prefix, spec["index"]), pure=False): spec
+               for spec in specs}
+    for future in as_completed(futures):
+        spec = futures.pop(future)
+        try:
+            result = future.result()
+        except Exception:  # the worker died under the flight (KilledWorker, ...)
+            result = {"index": spec["index"], "spec": spec, "status": "error", "traceback": traceback.format_exc()}
+        on_result(result)
+
+
+def run_sweep(specs, store, *, scheduler=None, workers=None, progress=None):
+    """Fly the specs not yet in ``store`` -> {"skipped", "flown", "failed", "wall_s"}."""
+    finished = store.finished()
+    todo = [s for s in specs if s["index"] not in finished]
+    counts = {"skipped": len(specs) - len(todo), "flown": 0, "failed": 0, "wall_s": 0.0}
+    if not todo:
+        return counts
+    started = time.monotonic()
+    client, cluster = open_client(scheduler, workers)
+
+    def on_result(result):
+        store.put(result)
+        counts["flown"] += 1
+        counts["failed"] += result["status"] != "ok" or not result["summary"]["success"]
+        if progress is not None:
+            progress(counts["flown"], len(todo), counts["failed"], time.monotonic() - started)
+
+    try:
+        store.record_attempts([s["index"] for s in todo])
+        fly_on(client, todo, on_result, key_prefix="flight-%d-%d" % (os.getpid(), store.run or 0))
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+    counts["wall_s"] = round(time.monotonic() - started, 2)
+    return counts

@@ -1,0 +1,63 @@
+"""The flights of a sweep: one spec per index, a pure function of (sweep seed, index, faults, camera, ranges).
+
+A spec is a plain dict (JSON and pickle friendly):
+
+    index, seed (the flight's), plantation_seed, camera, faults, conditions (see conditions.py), factors
+    (what the plantation generator drew), map (the map JSON object)
+
+Flight i of a sweep is the same whatever the count, the order or the number of workers, so a sweep can be
+extended (a larger --count) or resumed.
+"""
+import dataclasses
+import shlex
+
+import numpy as np
+
+from host_tools.maps import map_to_dict
+from host_tools.plantation import PlantationRanges, generate
+from host_tools.sweep import conditions as cond
+
+SEED_LIMIT = 2 ** 31 - 1
+
+
+def flight_spec(sweep_seed, index, *, faults="none", camera="sim", ranges=None, overrides=None):
+    """Spec of flight ``index`` of the sweep with ``sweep_seed``."""
+    rng = np.random.default_rng([int(sweep_seed), int(index), 0x5EE9])
+    plantation_seed = int(rng.integers(0, SEED_LIMIT))
+    flight_seed = int(rng.integers(0, SEED_LIMIT))
+    conditions = cond.draw(rng, cond.preset(faults, overrides), camera)
+    ranges = ranges or PlantationRanges()
+    pmap, factors = generate(plantation_seed, ranges)
+    return {"index": int(index), "seed": flight_seed, "plantation_seed": plantation_seed, "camera": camera,
+            "faults": faults, "conditions": conditions, "factors": factors,
+            "map": map_to_dict(pmap)}
+
+
+def make_specs(count, sweep_seed, *, faults="none", camera="sim", ranges=None, overrides=None):
+    return [flight_spec(sweep_seed, i, faults=faults, camera=camera, ranges=ranges, overrides=overrides)
+            for i in range(int(count))]
+
+
+def ranges_arguments(ranges):
+    """The ``foranav plantation`` options that give ``ranges`` (only those that differ from the defaults)."""
+    default = PlantationRanges()
+    args = []
+    for f in dataclasses.fields(PlantationRanges):
+        value = getattr(ranges, f.name)
+        if tuple(value) != tuple(getattr(default, f.name)):
+            args += ["--" + f.name.replace("_", "-"), "%s:%s" % tuple(value)]
+    return args
+
+
+def fly_command(spec, map_path):
+    """The exact ``foranav fly`` command that replays this flight (its map written at ``map_path``)."""
+    words = ["foranav", "fly", "--map", str(map_path), "--camera", spec["camera"], "--seed", str(spec["seed"])]
+    words += cond.fly_arguments(spec["conditions"])
+    return " ".join(shlex.quote(w) for w in words)
+
+
+def plantation_command(spec, map_path, ranges=None):
+    """The ``foranav plantation`` command that writes this flight's map."""
+    words = ["foranav", "plantation", "--seed", str(spec["plantation_seed"])]
+    words += ranges_arguments(ranges or PlantationRanges()) + ["--out", str(map_path)]
+    return " ".join(shlex.quote(w) for w in words)
