@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: setup test demo bench paper-tests deploy clean
+.PHONY: setup test demo bench paper-tests deploy clean camera-runtime docs
 
 setup: $(STAMP)
 
@@ -14,8 +14,17 @@ $(STAMP): pyproject.toml
 	$(BIN)/python -m pip install --quiet -e '.[test]'
 	touch $(STAMP)
 
-test: $(STAMP)
+test: $(STAMP) camera-runtime
 	$(BIN)/python -m pytest -q
+
+# The camera's own runtime (Python 3.7 + numpy 1.16.6 + OpenCV 4.10) in .venv-camera/, built once from the
+# machine's Python 3.7 (a stamp file inside makes a second run a no-op); tests/test_camera_runtime.py uses it.
+camera-runtime: $(STAMP)
+	$(BIN)/python -m host_tools.jevois_host.camera_runtime build
+
+# docs/reference/*.md from the code (commands, flight app PARAMs, camera module parameters)
+docs: $(STAMP)
+	$(BIN)/python -m host_tools.docs_gen
 
 demo: $(STAMP)
 	$(BIN)/foranav demo
@@ -32,4 +41,4 @@ deploy: $(STAMP)
 	$(BIN)/foranav deploy --sd "$(SD)" $(DEPLOY_FLAGS)
 
 clean:
-	rm -rf $(VENV) runs .pytest_cache
+	rm -rf $(VENV) .venv-camera runs .pytest_cache

@@ -6,10 +6,10 @@ import sys
 
 import pytest
 
-from host_tools import cli, fileio
-from host_tools.deploy import module_files
+from host_tools import cli
+from host_tools.deploy import card_fs, module_files
 from host_tools.deploy.videomappings import parse_mappings
-from test_deploy_fixtures import USER_INITSCRIPT, USER_VIDEOMAPPINGS, make_card, make_module_folder
+from test_deploy_fixtures import HELPER_SOURCE, USER_INITSCRIPT, USER_VIDEOMAPPINGS, make_card, make_module_folder
 
 MODULE = "modules/ForaNav/ForaNavTrees"
 USB_LINE = "YUYV 352 288 15.0 YUYV 352 288 15.0 ForaNav ForaNavTrees"
@@ -67,7 +67,8 @@ def test_that_params_cfg_lists_the_module_parameters_commented_out(card_and_modu
     assert "#svmthresh=0.5" in lines
     assert "#framemark=true" in lines
     assert "#step=8" in lines  # a named constant of a helper file, through a parameter-making helper method
-    assert not any(line.startswith("#hsthresh=") for line in lines)  # set at load time: no value to show
+    # Set at load time from the model file (3 weights): only loading the module can tell.
+    assert "#hsthresh=0.30000000000000004" in lines
     assert any(line.startswith("# hsthresh (float): colour test threshold") for line in lines)
 
 
@@ -177,7 +178,7 @@ def test_that_a_species_model_named_in_the_code_but_missing_is_reported_not_refu
     # The module runs on its default model; only selecting that species on the camera would fail.
     sd = make_card(tmp_path)
     module_dir = make_module_folder(tmp_path / "src")
-    (module_dir / "foranav_helper.py").write_text('CITRUS = "foranav_citrus.npz"\n')
+    (module_dir / "foranav_helper.py").write_text(HELPER_SOURCE + 'CITRUS = "foranav_citrus.npz"\n')
     assert deploy(sd, module_dir) == 0
     assert "foranav_citrus.npz" in capsys.readouterr().out
 
@@ -238,7 +239,7 @@ def test_that_an_updated_module_file_is_backed_up_before_it_is_replaced(card_and
     sd, module_dir = card_and_module
     deploy(sd, module_dir)
     old = (sd / MODULE / "foranav_helper.py").read_bytes()
-    (module_dir / "foranav_helper.py").write_text('def line():\n    return "MARK STOP "\n')
+    (module_dir / "foranav_helper.py").write_text(HELPER_SOURCE.replace('"MARK STOP"', '"MARK STOP "'))
     deploy(sd, module_dir)
     assert (sd / MODULE / "foranav_helper.py.foranav-bak-1").read_bytes() == old
     assert (sd / MODULE / "foranav_helper.py").read_bytes() == (module_dir / "foranav_helper.py").read_bytes()
@@ -257,16 +258,16 @@ def test_that_the_real_module_folder_deploys(tmp_path):
 
 def test_that_a_failing_write_stops_with_one_line_and_leaves_whole_files(card_and_module, capsys, monkeypatch):
     sd, module_dir = card_and_module
-    real_write = fileio.write_bytes
+    real_write = card_fs.write_file
     written = []
 
-    def card_full(path, data):
+    def card_full(root, path, data, mode):
         if len(written) == 3:
             raise OSError(28, "No space left on device")
         written.append(path)
-        real_write(path, data)
+        real_write(root, path, data, mode)
 
-    monkeypatch.setattr(fileio, "write_bytes", card_full)
+    monkeypatch.setattr(card_fs, "write_file", card_full)
     assert deploy(sd, module_dir) == BAD_INPUT_EXIT
     err = capsys.readouterr().err
     assert len(err.strip().splitlines()) == 1 and "after 3 file(s)" in err

@@ -2,11 +2,14 @@
 fake card looks like the real one to the deploy code."""
 import io
 import textwrap
+import zipfile
 
 import numpy as np
 
 from host_tools.deploy import card
 from host_tools.deploy.videomappings import parse_mappings
+
+FIXED_ZIP_TIME = (2024, 1, 1, 0, 0, 0)
 
 # An excerpt of a real JeVois-A33 videomappings.cfg: comments, blank lines, a commented-out mapping, a mapping with
 # a trailing comment and relative USB size, the single default (*), a NONE mapping, and a USB mode that clashes
@@ -37,7 +40,10 @@ USER_INITSCRIPT = textwrap.dedent("""\
 
 MODULE_SOURCE = textwrap.dedent('''\
     """Fake ForaNavTrees for deploy tests."""
+    import os
+
     import libjevois as jevois
+    import numpy as np
     import foranav_helper
 
     MODEL = "foranav_oil_palm.npz"
@@ -54,6 +60,11 @@ MODULE_SOURCE = textwrap.dedent('''\
             self.add(pc, "step", "int", "window step", foranav_helper.STEP)
             self.add(pc, "hsthresh", "float", "colour test threshold", self.model_threshold())
 
+        def model_threshold(self):
+            # A default only known once the module runs: it comes from the model file.
+            folder = os.path.dirname(os.path.abspath(__file__))
+            return 0.1 * len(np.load(os.path.join(folder, MODEL))["weights"])
+
         def add(self, category, name, kind, description, default):
             setattr(self, name, jevois.Parameter(self, name, kind, description, default, category))
 
@@ -65,8 +76,13 @@ HELPER_SOURCE = 'STEP = 8\n\n\ndef line():\n    return "MARK STOP"\n'
 
 
 def npz_bytes(**arrays):
+    """An .npz archive (what np.savez writes) with a fixed member time, so the same arrays give the same bytes."""
     buffer = io.BytesIO()
-    np.savez(buffer, **(arrays or {"weights": np.zeros(3)}))
+    with zipfile.ZipFile(buffer, "w") as archive:
+        for name, array in sorted((arrays or {"weights": np.zeros(3)}).items()):
+            member = io.BytesIO()
+            np.save(member, array)
+            archive.writestr(zipfile.ZipInfo(name + ".npy", date_time=FIXED_ZIP_TIME), member.getvalue())
     return buffer.getvalue()
 
 

@@ -1,15 +1,17 @@
-"""Deploying to a mounted JEVOIS partition: a pure plan of file changes, and the adapters that read the card and
-carry the plan out (numbered backups, atomic writes).
+"""Deploying to a mounted JEVOIS partition: a pure plan of file changes, and the adapters that read the card
+and carry the plan out (numbered backups, durable atomic writes: card_fs).
 
-The plan is computed from the card's current contents before anything is written, so a bad card, a bad module
-or a damaged config file stops the deploy with nothing changed; `--dry-run` prints the same plan and stops.
+The plan is computed from the card's current contents, then checked whole against what is on the card (a
+folder where a file goes, a write-protected file, a symlink off the card), all before anything is written, so a
+bad card, a bad module or a damaged config file stops the deploy with nothing changed; `--dry-run` prints the
+same plan and stops. Temporary files an interrupted deploy left are removed first.
 """
-import collections
 import os
 import re
+from dataclasses import dataclass
 from pathlib import Path
 
-from host_tools import fileio
+from host_tools.deploy import card_fs
 from host_tools.deploy.initscript import block_mapping, headless_commands, plan_initscript
 from host_tools.deploy.videomappings import plan_videomappings
 from host_tools.errors import ForaNavError
@@ -26,35 +28,53 @@ BOOT_PARTITION_FILES = ("uImage", "uEnv.txt", "script.bin")
 TEXT_CODEC = ("utf-8", "surrogateescape")
 NEW_FILE_MODE = 0o644
 
-CardState = collections.namedtuple("CardState", "files names")  # files: {path: bytes}; names: paths present
-FileChange = collections.namedtuple("FileChange", "path action data backup detail")  # action: create|update|same
-DeployPlan = collections.namedtuple("DeployPlan", "changes notes")
+
+@dataclass(frozen=True)
+class CardState:
+    files: dict  # {card path: bytes} of every file the deploy may change
+    names: frozenset  # card paths of the files present in config/ and the module folder
+    stray: tuple = ()  # card paths of temporary files an interrupted deploy left
 
 
-def module_dir(vendor, module):
+@dataclass(frozen=True)
+class FileChange:
+    path: str
+    action: str  # create, update, same or remove (a stray temporary file)
+    data: bytes
+    backup: str = None
+    detail: tuple = ()
+
+
+@dataclass(frozen=True)
+class DeployPlan:
+    changes: list
+    notes: list
+
+
+def module_dir(vendor: str, module: str) -> str:
     return "%s/%s/%s" % (MODULES_DIR, vendor, module)
 
 
-def decode(data):
+def decode(data: bytes) -> str:
     return data.decode(*TEXT_CODEC)
 
 
-def encode(text):
+def encode(text: str) -> bytes:
     return text.encode(*TEXT_CODEC)
 
 
-def backup_path(path, names):
+def backup_path(path: str, names) -> str:
     """`<path>.foranav-bak-<n>`, n one more than the highest backup of `path` already on the card."""
     numbers = [int(m.group("n")) for m in (_BACKUP_RE.match(name) for name in names)
                if m and m.group("path") == path]
     return "%s%s%d" % (path, BACKUP_MARK, max(numbers, default=0) + 1)
 
 
-def is_backup(path):
+def is_backup(path: str) -> bool:
     return _BACKUP_RE.match(path) is not None
 
 
-def plan_file(state, path, data, detail=()):
+def plan_file(state: CardState, path: str, data: bytes, detail=()) -> FileChange:
     old = state.files.get(path)
     if old is None:
         return FileChange(path, "create", data, None, tuple(detail))
@@ -76,7 +96,7 @@ def _initscript_changes(state, vendor, module, mode, headless):
     return [], []
 
 
-def plan_deploy(state, payload, vendor, module, mode, headless):
+def plan_deploy(state: CardState, payload: dict, vendor: str, module: str, mode, headless: bool) -> DeployPlan:
     """The changes that install `payload` ({file name: bytes}) as modules/<vendor>/<module>/ and register it.
 
     Pure: `state` is what read_card returned. Module files come first and config files last, so the camera never
@@ -92,12 +112,15 @@ def plan_deploy(state, payload, vendor, module, mode, headless):
     notes = list(mappings.notes) + init_notes
     deployed = {change.path for change in changes}
     for name in sorted(state.names):
-        if name.startswith(folder + "/") and name not in deployed and not is_backup(name):
+        if name.startswith(folder + "/") and name not in deployed and not is_backup(name) \
+                and name not in state.stray:
             notes.append("%s is not part of this module release; left in place" % name)
-    return DeployPlan(changes, notes)
+    removals = [FileChange(path, "remove", b"") for path in state.stray]
+    notes += ["%s: temporary file of an interrupted deploy, removed" % path for path in state.stray]
+    return DeployPlan(removals + changes, notes)
 
 
-def check_card(root):
+def check_card(root) -> Path:
     """Adapter: refuse a PATH that is not a mounted JEVOIS partition, with one line that says what to give."""
     root = Path(root)
     if not root.is_dir():
@@ -108,74 +131,145 @@ def check_card(root):
     if missing:
         raise ForaNavError("--sd %s: not a JEVOIS partition (no %s); give the mount point of the card's JEVOIS "
                            "partition, e.g. /media/$USER/JEVOIS" % (root, " or ".join(missing)))
-    if not (root / VIDEOMAPPINGS).is_file():
+    real = card_fs.real_root(root)
+    for folder in (CONFIG_DIR, MODULES_DIR):
+        card_fs.on_card(real, folder)
+    kind = card_fs.entry(real, VIDEOMAPPINGS).kind
+    if kind == "missing":
         raise ForaNavError("--sd %s: %s is missing; boot the camera once with this card to create it"
                            % (root, VIDEOMAPPINGS))
-    return root
+    if kind != "file":
+        raise ForaNavError("--sd %s: %s is a %s, not a file" % (root, VIDEOMAPPINGS, kind))
+    return real
 
 
-def _relative_files(root, folder):
-    base = root / folder
-    if not base.is_dir():
+def _relative_files(root, folder, needed=None):
+    """Card paths of the files in `folder`. A symlink off the card is refused if deploy needs that file
+    (`needed` None: every file of the folder), and otherwise left out: deploy neither reads nor writes it."""
+    if card_fs.entry(root, folder).kind != "folder":
         return []
-    return [folder + "/" + path.name for path in sorted(base.iterdir()) if path.is_file()]
+    base = card_fs.on_card(root, folder)
+    names = []
+    for name in (folder + "/" + path.name for path in sorted(base.iterdir())):
+        try:
+            kind = card_fs.entry(root, name).kind
+        except ForaNavError:
+            if needed is None or name in needed:
+                raise
+            continue
+        if kind == "file":
+            names.append(name)
+    return names
 
 
-def read_card(root, vendor, module):
-    """Adapter: CardState with the bytes of every file the deploy may change and the names already present."""
+def _module_folders(vendor, module):
+    return [MODULES_DIR + "/" + vendor, module_dir(vendor, module)]
+
+
+def read_card(root, vendor: str, module: str) -> CardState:
+    """Adapter: CardState with the bytes of every file the deploy may change and the names already present.
+
+    Every path it reads is resolved first: a symlink off the card stops the deploy here, before any write.
+    """
+    shown = root
     root = check_card(root)
-    names = _relative_files(root, CONFIG_DIR) + _relative_files(root, module_dir(vendor, module))
-    wanted = set(_relative_files(root, module_dir(vendor, module))) | {VIDEOMAPPINGS, INITSCRIPT}
+    for folder in _module_folders(vendor, module):
+        card_fs.on_card(root, folder)
+    folder = module_dir(vendor, module)
+    module_files = _relative_files(root, folder)
+    names = _relative_files(root, CONFIG_DIR, (VIDEOMAPPINGS, INITSCRIPT)) + module_files
+    wanted = set(module_files) | {VIDEOMAPPINGS, INITSCRIPT}
     try:
-        files = {name: (root / name).read_bytes() for name in names if name in wanted}
+        files = {name: card_fs.on_card(root, name).read_bytes() for name in names if name in wanted}
+        stray = card_fs.stray_temp_files(root, CONFIG_DIR) + card_fs.stray_temp_files(root, folder)
     except OSError as err:
-        raise ForaNavError("--sd %s: cannot read the card: %s" % (root, err))
-    return CardState(files, frozenset(names))
+        raise ForaNavError("--sd %s: cannot read the card: %s" % (shown, err))
+    files = {name: data for name, data in files.items() if name not in stray}
+    return CardState(files, frozenset(names), tuple(stray))
 
 
-def _file_mode(path):
-    """The permission bits a rewritten file should keep (new files: rw-r--r--, as a copy would get)."""
-    try:
-        return path.stat().st_mode & 0o777
-    except FileNotFoundError:
-        return NEW_FILE_MODE
+def _parents(path):
+    parts = path.split("/")[:-1]
+    return ["/".join(parts[:i]) for i in range(1, len(parts) + 1)]
 
 
-def _set_mode(path, mode):
-    # The atomic writer's temporary file is private (0600); a FAT card ignores modes and may refuse chmod.
-    try:
-        os.chmod(str(path), mode)
-    except OSError:
-        pass
+def check_plan(plan: DeployPlan, entries: dict, force: bool, shown_root) -> None:
+    """Pure: the plan against what is on the card (`entries`: {card path: card_fs.Entry}, for every path the
+    plan writes, its backups and their folders). ForaNavError on the first path that would fail or that the
+    user protected; nothing has been written yet."""
+    protected = []
+    for change in plan.changes:
+        if change.action == "same":
+            continue
+        for folder in _parents(change.path):
+            if entries[folder].kind not in ("folder", "missing"):
+                raise ForaNavError("--sd %s: %s is a %s where deploy needs a folder; move it away and deploy "
+                                   "again" % (shown_root, folder, entries[folder].kind))
+        parent = entries[_parents(change.path)[-1]]
+        if parent.kind == "folder" and parent.write_protected:
+            raise ForaNavError("--sd %s: %s/ is not writable (mounted read-only, or its permissions?)"
+                               % (shown_root, _parents(change.path)[-1]))
+        kind = entries[change.path].kind
+        if change.action == "remove":
+            continue
+        if kind not in ("file", "missing"):
+            raise ForaNavError("--sd %s: %s is a %s, not a file; move it away and deploy again"
+                               % (shown_root, change.path, kind))
+        if change.backup and entries[change.backup].kind != "missing":
+            raise ForaNavError("--sd %s: %s is in the way of the backup; move it away and deploy again"
+                               % (shown_root, change.backup))
+        if kind == "file" and entries[change.path].write_protected:
+            protected.append(change.path)
+    if protected and not force:
+        more = " (and %d more)" % (len(protected) - 1) if len(protected) > 1 else ""
+        raise ForaNavError("--sd %s: %s%s is write-protected; deploy leaves it alone unless you give --force"
+                           % (shown_root, protected[0], more))
 
 
-def apply_plan(root, plan):
-    """Adapter: back up every file that changes, then write the new contents atomically, in plan order."""
-    root = Path(root)
+def inspect_plan(root, plan: DeployPlan) -> dict:
+    """Adapter: card_fs.Entry of every path `plan` touches (raises if one leads off the card)."""
+    root = card_fs.real_root(root)
+    paths = set()
+    for change in plan.changes:
+        paths.update([change.path] + _parents(change.path) + ([change.backup] if change.backup else []))
+    return {path: card_fs.entry(root, path) for path in sorted(paths)}
+
+
+def preflight(root, plan: DeployPlan, force: bool) -> None:
+    """Adapter: everything the writes need is checked before the first one (see check_plan)."""
+    check_plan(plan, inspect_plan(root, plan), force, root)
+
+
+def apply_plan(root, plan: DeployPlan) -> None:
+    """Adapter: remove stray temporary files, back up every file that changes, then write the new contents
+    durably, in plan order."""
+    shown, root = root, card_fs.real_root(root)
     if not os.access(str(root), os.W_OK):
-        raise ForaNavError("--sd %s: the card is not writable (mounted read-only?)" % root)
+        raise ForaNavError("--sd %s: the card is not writable (mounted read-only?)" % shown)
     done = []
     try:
         for change in plan.changes:
+            if change.action == "remove":
+                card_fs.remove_file(root, change.path)
+        for change in plan.changes:
             if change.action == "update":
-                fileio.write_bytes(root / change.backup, (root / change.path).read_bytes())
-                _set_mode(root / change.backup, _file_mode(root / change.path))
+                mode = card_fs.file_mode(root, change.path, NEW_FILE_MODE)
+                card_fs.write_file(root, change.backup, card_fs.on_card(root, change.path).read_bytes(), mode)
                 done.append(change.backup)
         for change in plan.changes:
-            if change.action != "same":
-                mode = _file_mode(root / change.path)
-                fileio.write_bytes(root / change.path, change.data)
-                _set_mode(root / change.path, mode)
+            if change.action in ("create", "update"):
+                card_fs.write_file(root, change.path, change.data, card_fs.file_mode(root, change.path,
+                                                                                     NEW_FILE_MODE))
                 done.append(change.path)
     except OSError as err:
         # Each file is whole (old or new); say how far we got so the user can finish or restore from backups.
         raise ForaNavError("--sd %s: writing stopped after %d file(s) (%s): %s"
-                           % (root, len(done), ", ".join(done[-3:]) or "none", err))
+                           % (shown, len(done), ", ".join(done[-3:]) or "none", err))
 
 
-def describe_plan(plan, root, dry_run):
+def describe_plan(plan: DeployPlan, root, dry_run: bool) -> list:
     """The lines `foranav deploy` prints: one per file, what is added to config files, then the notes."""
-    verb = {"create": "create", "update": "update", "same": "keep  "}
+    verb = {"create": "create", "update": "update", "same": "keep  ", "remove": "remove"}
     lines = ["%s %s:" % ("Would change" if dry_run else "Changed", root)]
     for change in plan.changes:
         suffix = "" if change.action != "same" else "  (unchanged)"
@@ -189,5 +283,5 @@ def describe_plan(plan, root, dry_run):
     return lines
 
 
-def changed_paths(plan):
-    return [change.path for change in plan.changes if change.action != "same"]
+def changed_paths(plan: DeployPlan) -> list:
+    return [change.path for change in plan.changes if change.action in ("create", "update")]

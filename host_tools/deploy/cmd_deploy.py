@@ -3,9 +3,13 @@
 Copies the module folder with its model files to modules/<Vendor>/ForaNavTrees/ with a generated script.cfg
 (T2 lines to the 4-pin serial port) and params.cfg; adds a USB-video and a NONE (headless) mapping to
 config/videomappings.cfg; with --headless, makes config/initscript.cfg start the module at power-on. Idempotent:
-a second run changes nothing. Every changed file is backed up first (<file>.foranav-bak-<n>) and written
-atomically. --dry-run prints the plan and writes nothing.
+a second run changes nothing. Your edits to the card's params.cfg and script.cfg are kept (merged into the new
+ones; the output says what was kept). Everything is checked before the first write; every changed file is backed
+up first (<file>.foranav-bak-<n>) and written atomically. A write-protected file is left alone unless --force.
+--dry-run prints the plan and writes nothing.
 """
+from pathlib import Path
+
 from host_tools.deploy import card, module_files
 from host_tools.deploy.modes import DEFAULT_MODE_TEXT, format_mode, is_calibrated_size, parse_mode
 
@@ -21,6 +25,9 @@ def add_arguments(parser):
     parser.add_argument("--headless", action="store_true",
                         help="start the module at power-on without USB (config/initscript.cfg)")
     parser.add_argument("--dry-run", action="store_true", help="print what would change and write nothing")
+    parser.add_argument("--force", action="store_true",
+                        help="rewrite write-protected files, and comment out settings of yours on the card that the "
+                             "new module refuses (both are backed up first)")
     parser.add_argument("--module-dir", default=None, metavar="DIR",
                         help="module folder to install (default: the repository's jevois_module/ForaNavTrees)")
 
@@ -30,9 +37,15 @@ def plan_from_args(args):
     mode = parse_mode(args.mode)
     vendor = module_files.check_name("vendor", args.vendor)
     folder = args.module_dir or module_files.default_module_folder()
-    payload = module_files.build_module_payload(module_files.read_module_folder(folder), vendor, mode)
+    module_folder = module_files.read_module_folder(folder)
     state = card.read_card(args.sd, vendor, module_files.MODULE_NAME)
+    on_card = card.module_dir(vendor, module_files.MODULE_NAME)
+    card_files = {name: card.decode(state.files[on_card + "/" + name]) for name in module_files.GENERATED_NAMES
+                  if on_card + "/" + name in state.files}
+    payload = module_files.build_module_payload(module_folder, vendor, mode, card_files=card_files,
+                                                force=args.force, card_label=str(Path(args.sd) / on_card))
     plan = card.plan_deploy(state, payload.files, vendor, module_files.MODULE_NAME, mode, args.headless)
+    card.preflight(args.sd, plan, args.force)
     notes = list(payload.notes)
     if not is_calibrated_size(mode):
         notes.append("the flight app's camera model is calibrated at 352x288: set its app.camWidth=%d and "

@@ -1,18 +1,23 @@
-"""The module folder as it goes onto the card: which files, checks that it will load on the camera, and the
-generated `script.cfg` / `params.cfg`.
+"""The module folder as it goes onto the card: which files, checks that it will load on the camera, and its
+`script.cfg` / `params.cfg` (generated, merged with the card's copies: module_cfg).
 
 On the camera the folder is `modules/<Vendor>/<Module>/` and the engine imports `<Module>.py`, creates
 `class <Module>`, applies `params.cfg` (module parameters, after `init()`), then runs `script.cfg` (console
-commands). The host-only `__init__.py`, caches and tests stay behind.
+commands). The host-only `__init__.py`, caches and tests stay behind. The module's parameters are read by
+loading it as the camera would (module_probe), never by reading its source.
 """
 import ast
-import collections
 import io
 import re
 import zipfile
+from dataclasses import dataclass
 from pathlib import Path
 
-from host_tools.deploy.modes import format_fps, format_mode, serial_lines_per_frame
+import jevois_module
+
+from host_tools.deploy import module_cfg
+from host_tools.deploy.modes import serial_lines_per_frame
+from host_tools.deploy.module_probe import probe_module
 from host_tools.errors import ForaNavError
 
 MODULE_NAME = "ForaNavTrees"
@@ -24,13 +29,14 @@ DEPLOYED_SUFFIXES = (".py", ".npz", ".npy", ".yaml", ".yml", ".xml", ".json", ".
 HOST_ONLY_NAMES = ("__init__.py", "conftest.py")
 HOST_ONLY_PATTERNS = (re.compile(r"^test_.*\.py$"), re.compile(r"^.*_test\.py$"))
 GENERATED_NAMES = ("script.cfg", "params.cfg")
-# The module's cap on trees reported per frame (ForaNavTrees.py); with the end-of-frame mark it must fit `serlimit`.
-MAX_TREES_PARAMETER = "maxtrees"
 MODEL_NAME_RE = re.compile(r"^foranav_\w+\.npz$")
 NAME_RE = re.compile(r"^[A-Z][A-Za-z0-9_]*$")  # JeVois Inventor wants an uppercase first letter
 
-ModuleParameter = collections.namedtuple("ModuleParameter", "name type description default")
-ModulePayload = collections.namedtuple("ModulePayload", "files notes")  # files: {name: bytes}; notes: [str]
+
+@dataclass(frozen=True)
+class ModulePayload:
+    files: dict  # {file name: bytes}, sorted by name
+    notes: list  # lines for the user
 
 
 def check_name(kind, name):
@@ -114,149 +120,63 @@ def validate_module(files, module_name=MODULE_NAME, default_model=DEFAULT_MODEL)
     return trees, notes
 
 
-# jevois.Parameter type names (PythonParameter.C); a call passing (name, one of these, description, default)
-# is taken as a parameter definition, whether it calls jevois.Parameter directly or through a small helper.
-JEVOIS_PARAMETER_TYPES = frozenset((
-    "bool", "char", "byte", "uint8", "int16", "uint16", "int", "int32", "uint", "uint32", "long", "int64",
-    "uint64", "float", "double", "str", "ipoint", "fpoint", "isize", "fsize", "iscalar", "fscalar"))
-_UNKNOWN = object()
-_PARAMETER_NAME_RE = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+def _own_params(text):
+    """{name: value} of the module folder's own params.cfg (ForaNav's values, set on the card as ours)."""
+    own = {}
+    for number, raw in enumerate((text or "").splitlines(), 1):
+        line = raw.strip()
+        if not line or line.startswith("#"):
+            continue
+        if "=" not in line:
+            raise ForaNavError("module folder params.cfg line %d: %r is not a name=value line" % (number, line))
+        own[module_cfg.params_key(line)] = module_cfg.params_value(line)
+    return own
 
 
-def _literal(node, default=_UNKNOWN):
-    try:
-        return ast.literal_eval(node)
-    except ValueError:
-        return default
+def _check_own_params(own, probe):
+    for name, value in own.items():
+        if probe.parameter(name) is None:
+            raise ForaNavError("module folder params.cfg: the module has no parameter %s (it has: %s)"
+                               % (name, ", ".join(p.name for p in probe.parameters)))
+        if (name, value) in probe.refusals:
+            raise ForaNavError("module folder params.cfg: %s=%s is refused by the module (%s)"
+                               % (name, value, probe.refusals[(name, value)]))
 
 
-def _top_level_constants(tree):
-    """NAME = <literal> assignments at the top of a file, to show defaults given as named constants."""
-    constants = {}
-    for node in tree.body:
-        if isinstance(node, ast.Assign) and len(node.targets) == 1 and isinstance(node.targets[0], ast.Name):
-            value = _literal(node.value)
-            if value is not _UNKNOWN:
-                constants[node.targets[0].id] = value
-    return constants
-
-
-def _resolve_default(node, constants, own_stem):
-    value = _literal(node)
-    if value is not _UNKNOWN:
-        return value
-    if isinstance(node, ast.Name):
-        return constants.get(own_stem, {}).get(node.id, _UNKNOWN)
-    if isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name):
-        return constants.get(node.value.id, {}).get(node.attr, _UNKNOWN)
-    return _UNKNOWN
-
-
-def _parameter_in_call(args, constants, own_stem):
-    for i in range(len(args) - 3):
-        name, kind, description = (_literal(arg, None) for arg in args[i:i + 3])
-        if (isinstance(name, str) and _PARAMETER_NAME_RE.match(name) and kind in JEVOIS_PARAMETER_TYPES
-                and isinstance(description, str)):
-            return ModuleParameter(name, kind, description, _resolve_default(args[i + 3], constants, own_stem))
-    return None
-
-
-def module_parameters(trees):
-    """Parameters the module defines, read from its source ({file name: ast.Module}), in source order; a
-    default that is not a literal or a named constant of the module's files is _UNKNOWN (e.g. from the model)."""
-    constants = {name[:-3]: _top_level_constants(tree) for name, tree in trees.items()}
-    found = {}
-    for name, tree in sorted(trees.items()):
-        calls = sorted((node for node in ast.walk(tree) if isinstance(node, ast.Call)),
-                       key=lambda node: (node.lineno, node.col_offset))
-        for call in calls:
-            parameter = _parameter_in_call(call.args, constants, name[:-3])
-            if parameter is not None and parameter.name not in found:
-                found[parameter.name] = parameter
-    return list(found.values())
-
-
-def _cfg_value(value):
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    return str(value)
-
-
-def script_cfg(vendor, module_name, mode, extra_text=""):
-    """Console commands run after the module loads: T2 lines to the 4-pin port, logs off it, a serial budget."""
-    lines = [
-        "# %s/%s script.cfg, generated by ForaNav for %s: console commands run after the module loads." % (
-            vendor, module_name, format_mode(mode)),
-        "# T2/MARK lines go to the 4-pin hardware port (the flight controller); log lines go nowhere, so they",
-        "# cannot mix into the T2 stream. Use `setpar serlog USB` from a terminal to see the detector's logs.",
-        "setpar serout Hard",
-        "setpar serlog None",
-        "# At most this many serial lines per frame: what 115200 baud carries at %s fps with 20 %% to spare." % (
-            format_fps(mode.fps)),
-        "setpar serlimit %d" % serial_lines_per_frame(mode.fps),
-        "# Fixed exposure (autoexp 1 = manual; absexp at most about one frame period) if the automatic one hunts",
-        "# over bright canopy; uncomment to use:",
-        "#setcam autoexp 1",
-        "#setcam absexp 200",
-    ]
-    if extra_text.strip():
-        lines += ["# From the module folder's own script.cfg:", extra_text.rstrip("\r\n")]
-    return "\n".join(lines) + "\n"
-
-
-def serial_overrides(parameters, mode):
-    """{parameter: (value, why)} the mode forces: per-frame trees the serial port cannot carry are capped, so
-    the end-of-frame mark is never the line `serlimit` drops."""
-    budget = serial_lines_per_frame(mode.fps)
-    overrides = {}
-    for parameter in parameters:
-        if (parameter.name == MAX_TREES_PARAMETER and isinstance(parameter.default, int)
-                and parameter.default + 1 > budget):
-            overrides[parameter.name] = (budget - 1, "at %s fps the serial port carries %d lines per frame, "
-                                         "end-of-frame mark included" % (format_fps(mode.fps), budget))
-    return overrides
-
-
-def params_cfg(vendor, module_name, parameters, extra_text="", overrides=None):
-    """Module parameters applied at load (after init()). Defaults live in the code; the known ones are listed
-    commented out so a user can see and change them on the card without reading the source. `overrides`
-    ({name: (value, why)}) are written as active lines."""
-    overrides = overrides or {}
-    lines = ["# %s/%s params.cfg, generated by ForaNav: name=value lines applied when the module loads." % (
-        vendor, module_name),
-             "# Remove the leading # of a line to change that parameter (the values shown are the defaults)."]
-    for name, (value, why) in sorted(overrides.items()):
-        lines += ["# Set by ForaNav for this camera mode: %s." % why, "%s=%s" % (name, _cfg_value(value))]
-    for parameter in parameters:
-        lines.append("# %s (%s): %s" % (parameter.name, parameter.type, " ".join(parameter.description.split())))
-        if parameter.default is _UNKNOWN:
-            lines.append("#   (its default is set by the module when it loads, e.g. from the model file)")
-        else:
-            lines.append("#%s=%s" % (parameter.name, _cfg_value(parameter.default)))
-    if extra_text.strip():
-        lines += ["# From the module folder's own params.cfg:", extra_text.rstrip("\r\n")]
-    return "\n".join(lines) + "\n"
-
-
-def build_module_payload(files, vendor, mode, module_name=MODULE_NAME, default_model=DEFAULT_MODEL):
-    """ModulePayload for modules/<Vendor>/<Module>/ on the card: the validated module files plus the generated
-    script.cfg and params.cfg, and notes for the user. Pure: `files` is what read_module_folder returned."""
+def build_module_payload(files: dict, vendor: str, mode, module_name: str = MODULE_NAME,
+                         default_model: str = DEFAULT_MODEL, card_files: dict | None = None, force: bool = False,
+                         card_label: str | None = None) -> ModulePayload:
+    """ModulePayload for modules/<Vendor>/<Module>/ on the card: the validated module files plus script.cfg and
+    params.cfg, and notes for the user. `files` is what read_module_folder returned; `card_files` ({name: text})
+    holds the card's current params.cfg/script.cfg, whose user settings are merged in (module_cfg);
+    `card_label` names that card folder in messages. Everything is checked before anything is written."""
     check_name("vendor", vendor)
     check_name("module", module_name)
     own = {name: files[name].decode("utf-8", "replace") for name in GENERATED_NAMES if name in files}
+    card_files = card_files or {}
+    label = (card_label or "modules/%s/%s" % (vendor, module_name)) + "/"
     deployed = {name: data for name, data in files.items() if is_deployed_file(name)}
-    trees, notes = validate_module(deployed, module_name, default_model)
+    notes = validate_module(deployed, module_name, default_model)[1]
+    own_params = _own_params(own.get("params.cfg"))
+    user = module_cfg.card_params_lines(card_files.get("params.cfg"))
+    checks = sorted(set(own_params.items()) | {(line.key, module_cfg.params_value(line.line))
+                                               for line in user if "=" in line.line})
+    probe = probe_module(deployed, module_name, checks)
+    _check_own_params(own_params, probe)
+    forced = module_cfg.serial_overrides(probe.parameters, mode, own_params)
+    yours = {line.key for line in user}
+    notes += ["params.cfg sets %s=%s: %s" % (name, value, why) for name, (value, why) in sorted(forced.items())
+              if name not in own_params and name not in yours]
+    params = module_cfg.merge_params(vendor, module_name, probe.parameters, forced, card_files.get("params.cfg"),
+                                     probe.refusals, force, label + "params.cfg", serial_lines_per_frame(mode.fps))
+    script = module_cfg.merge_script(mode, module_cfg.command_lines(own.get("script.cfg")),
+                                     card_files.get("script.cfg"), label + "script.cfg")
     payload = dict(deployed)
-    payload["script.cfg"] = script_cfg(vendor, module_name, mode, own.get("script.cfg", "")).encode("utf-8")
-    parameters = module_parameters(trees)
-    overrides = serial_overrides(parameters, mode)
-    notes += ["params.cfg sets %s=%s: %s" % (name, value, why) for name, (value, why) in sorted(overrides.items())]
-    payload["params.cfg"] = params_cfg(vendor, module_name, parameters, own.get("params.cfg", ""),
-                                       overrides).encode("utf-8")
-    return ModulePayload(dict(sorted(payload.items())), notes)
+    payload["params.cfg"] = params.text.encode("utf-8", "surrogateescape")
+    payload["script.cfg"] = script.text.encode("utf-8", "surrogateescape")
+    return ModulePayload(dict(sorted(payload.items())), notes + params.notes + script.notes)
 
 
 def default_module_folder():
     """The repository's camera module folder (jevois_module/ForaNavTrees)."""
-    import jevois_module
     return Path(jevois_module.__file__).resolve().parent / MODULE_NAME

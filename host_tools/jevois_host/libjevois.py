@@ -12,7 +12,12 @@ Modelled on jevois/src/jevois/Core/PythonSupport.C (1.18+). Semantics kept from 
 - ``InputFrame.getCvBGR()/getCvGRAY()/getCvRGB()`` return copies; ``OutputFrame.sendCv(img)`` rescales to
   the output size (like the camera) and keeps the image.
 - ``LINFO/LERROR/LDEBUG`` log one string; ``LFATAL`` logs and raises.
-State (serial and log streams, frame counter) is module-level, as on the camera: one module at a time.
+State (serial and log streams, line ending, frame counter) is module-level, as on the camera: one module at
+a time. ``reset()`` puts all of it back to its start values, so that nothing one run leaves behind reaches the
+next one in the same process (a worker flies thousands of flights in a row); the loader calls it.
+
+This file is also run by the camera's own runtime (Python 3.7, numpy 1.16, OpenCV 4.10, see
+``camera_driver.py``): keep it to that subset.
 """
 import sys
 import time
@@ -39,6 +44,18 @@ def configure(serial_stream=None, log_stream=None, line_ending="\r\n"):
     _line_ending = line_ending
 
 
+def reset():
+    """Host only: every piece of module-level state back to its start value (no serial sink, frame 0)."""
+    configure()
+    set_frame_number(0)
+
+
+def set_frame_number(number):
+    """Host only: the value frameNum() returns (the runner counts its own frames)."""
+    global _frame_number
+    _frame_number = int(number)
+
+
 def _write(stream, text):
     if stream is None:
         return
@@ -56,11 +73,6 @@ def sendSerial(string):
 
 def frameNum():
     return _frame_number
-
-
-def _next_frame():
-    global _frame_number
-    _frame_number += 1
 
 
 def _log(prefix, message):
