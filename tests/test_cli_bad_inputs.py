@@ -223,6 +223,18 @@ CASES = [
     (["package", "--out", "no_dir/x.jvpkg"], "--out"),
     (["package", "--out", "keep.png"], "--out"),
     (["deploy", "--sd", "no_such_card"], "--sd"),
+    # split, plantation, sweep
+    (["split", "--data", "{in}/big_field.csv", "--held-out", "2", "--out", "s"], "--held-out"),
+    (["split", "--data", "{in}/big_field.csv", "--seed", "-1", "--out", "s"], "--seed"),
+    (["split", "--data", "{in}/big_field.csv", "--out", "keep.png"], "--out"),
+    (["plantation", "--seed", "-1"], "--seed"),
+    (["plantation", "--columns", "0:0"], "--columns"),
+    (["plantation", "--out", "afile/x.json"], "--out"),
+    (["sweep", "--count", "0", "--out", "sw"], "--count"),
+    (["sweep", "--count", "2", "--workers", "0", "--out", "sw"], "--workers"),
+    (["sweep", "--count", "2", "--out", "keep.png"], "--out"),
+    (["sweep", "--count", "2", "--faults", "extreme", "--out", "sw"], "--faults"),
+    (["sweep", "--count", "2", "--seed", "nan", "--out", "sw"], "--seed"),
     # the command itself
     (["nosuch"], "nosuch"),
     ([], "command"),

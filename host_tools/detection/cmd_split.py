@@ -10,16 +10,16 @@ from pathlib import Path
 
 import numpy as np
 
-from host_tools import annotations
+from host_tools import annotations, argtypes, fileio
 from host_tools.errors import ForaNavError
 
 
 def add_arguments(parser):
     parser.add_argument("--data", nargs="+", action="extend", default=[], required=True, metavar="CSV",
                         help="boxes CSVs (one source each; repeat or list several)")
-    parser.add_argument("--held-out", type=float, default=0.25, metavar="FRACTION",
+    parser.add_argument("--held-out", type=argtypes.float_range(0.0, 1.0), default=0.25, metavar="FRACTION",
                         help="share of each source's images held out (default %(default)s)")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the split (default 0)")
+    parser.add_argument("--seed", type=argtypes.seed, default=0, help="seed of the split (default 0)")
     parser.add_argument("--out", required=True, metavar="DIR", help="folder for train/ and test/")
 
 
@@ -36,8 +36,7 @@ def split_images(images, held_out, rng):
 def run(args):
     if not 0.0 < args.held_out < 1.0:
         raise ForaNavError("--held-out must be between 0 and 1")
-    if args.seed < 0:
-        raise ForaNavError("--seed must not be negative")
+    fileio.check_output_dir(args.out, "--out")
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise ForaNavError("--out %s: not a folder" % out)
