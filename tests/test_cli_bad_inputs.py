@@ -420,3 +420,17 @@ def test_that_map_and_clip_validators_raise_only_foranav_errors_on_damaged_files
                 refused += 1
                 assert "\n" not in str(err)
     assert refused > FUZZ_SAMPLES  # most damage is caught, none of it as another exception
+
+
+def test_that_detect_refuses_a_truncated_jpeg_and_a_non_utf8_crops_csv(tmp_path, capsys):
+    # Fixture: a real JPEG cut in half (OpenCV decodes it with only a warning), a crops CSV in Latin-1
+    image = np.full((64, 64, 3), 90, np.uint8)
+    jpeg = cv2.imencode(".jpg", image)[1].tobytes()
+    (tmp_path / "cut.jpg").write_bytes(jpeg[:len(jpeg) // 2])
+    (tmp_path / "crops.csv").write_bytes(b"image,class,category\ncaf\xe9.png,pos,oil_palm\n")
+    # Test / Assert
+    for argv, named in ((["detect", str(tmp_path / "cut.jpg")], "cut.jpg"),
+                        (["evaluate", "--model", "oil_palm", "--data", str(tmp_path / "crops.csv")], "not UTF-8")):
+        assert cli.main(argv) == 2
+        err = capsys.readouterr().err.splitlines()
+        assert len(err) == 1 and named in err[0], err

@@ -11,7 +11,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from host_tools import annotations
+from host_tools import annotations, images
 from host_tools.errors import ForaNavError
 
 import foranav_features as features
@@ -74,10 +74,7 @@ class Frame:
 
 
 def read_image(path):
-    image = cv2.imread(str(path), cv2.IMREAD_COLOR)
-    if image is None:
-        raise ForaNavError("%s: cannot read image" % path)
-    return image
+    return images.read_image(path)  # checked header: no huge allocations, truncated files refused
 
 
 def load_frames(csv_paths, limit=None):

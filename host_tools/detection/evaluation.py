@@ -19,6 +19,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from host_tools import fileio
 from host_tools.detection import dataset
 from host_tools.errors import ForaNavError
 
@@ -92,18 +93,14 @@ def crop_metrics(labels, predictions):
 
 
 def is_crops_csv(path):
-    try:
-        with open(path, encoding="utf-8") as handle:
-            first = handle.readline()
-    except OSError as err:
-        raise ForaNavError("%s: cannot read: %s" % (path, err.strerror or err))
+    first = fileio.read_text(path, "CSV file").partition("\n")[0]
     return tuple(h.strip() for h in first.strip().split(",")) == CROPS_HEADER
 
 
 def read_crops(csv_path):
     """[(image path, is positive, category)] of a crops CSV."""
     csv_path = Path(csv_path)
-    rows = list(csv.reader(io.StringIO(csv_path.read_text(encoding="utf-8"))))
+    rows = list(csv.reader(io.StringIO(fileio.read_text(csv_path, "crops CSV"))))
     crops = []
     for line_no, row in enumerate(rows[1:], start=2):
         if not row:
