@@ -199,6 +199,7 @@ class NavigationApp(object):
         while True:
             for line in self.link.poll(self.cf.x_task_get_tick_count()):
                 self.on_camera_line(line)
+            self._bound_frame()
             if self._frame and not self._marks_seen:
                 self._end_frame()  # a camera without frame marks: each batch of lines is one frame
             yield v_task_delay(m2t(CAMERA_TASK_PERIOD_MS))
@@ -218,11 +219,20 @@ class NavigationApp(object):
                 self.other_labels += 1
                 return
             p = self.params
-            if len(self._frame) >= p.frame_capacity:
+            if not self._bound_frame():
                 self.frame_overflow += 1  # T2 lines without MARK STOP must not pile up without limit
                 return
             self._frame.append(Detection(foranav_serial.std_to_img_x(message.x, p.cam_width_px),
                                          foranav_serial.std_to_img_y(message.y, p.cam_height_px)))
+
+    def _bound_frame(self):
+        """Keep the frame being received within app.frameCap (a PARAM that may be lowered in flight); True
+        if there is room for one more detection."""
+        cap = max(0, int(self.params.frame_capacity))
+        if len(self._frame) > cap:
+            self.frame_overflow += len(self._frame) - cap
+            del self._frame[cap:]
+        return len(self._frame) < cap
 
     def _end_frame(self):
         if not self._frame or self.core.phase in (PHASE_DONE, PHASE_NO_CAMERA) \

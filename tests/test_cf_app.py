@@ -77,7 +77,7 @@ def test_that_detection_lines_are_taken_and_everything_else_ignored():
                  + b"\r\n\x07\x08garbage\r\n" + fs.format_n2("oil_palm", 76, 144, 80, 80, 352, 288).encode()
                  + b"\r\nMARK STOP\r\nT2 0 0")
     cf.run_until(BOOTED_MS + 30)
-    # Assert: one frame with two detections (two trees: one frame never merges its own detections); the
+    # Assert: one frame with two detections (two trees 0.55 m apart: one frame never merges them); the
     # unterminated T2 waits for its line end
     assert app.frames == 1
     assert app.core.counters.detections == 2

@@ -138,6 +138,7 @@ def test_that_the_fuzz_stream_is_seeded():
 
 
 @pytest.mark.slow
+@pytest.mark.timeout(3600)
 def test_that_the_app_never_raises_on_a_million_fuzzed_lines():
     total = 0
     seed = 100

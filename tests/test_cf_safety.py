@@ -177,6 +177,18 @@ def test_that_t2_lines_without_mark_stop_do_not_pile_up():
     assert app.pending_detections == app.params.frame_capacity
 
 
+def test_that_lowering_frame_cap_in_flight_trims_the_pending_frame():
+    # found by the fuzz run: app.frameCap lowered while a long frame was pending left it above the cap
+    cf, app = make_app()
+    cf.run_until(BOOTED_MS)
+    app.link.port.write(t2_frame([]) + b"T2 10 20\r\n" * 50)
+    cf.run_until(BOOTED_MS + 20)
+    assert app.pending_detections == 50
+    cf.registry.param_set("app.frameCap", 10)
+    cf.run_until(BOOTED_MS + 40)
+    assert app.pending_detections == 10 and app.frame_overflow == 40
+
+
 # -- 11. go back once for a tree abandoned while hidden ------------------------------------------------------
 
 def test_that_a_tree_hidden_for_20_s_is_reached_on_the_way_back_before_landing():
