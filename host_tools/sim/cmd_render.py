@@ -12,7 +12,8 @@ from host_tools import fileio
 from host_tools.errors import ForaNavError
 from host_tools.maps import load_map
 from host_tools.sim.camera import Pose
-from host_tools.sim.cli_args import EFFECT_PRESETS, add_camera_arguments, camera_from_args, positive
+from host_tools.sim.cli_args import (EFFECT_PRESETS, add_appearance_arguments, add_camera_arguments,
+                                     appearance_from_args, camera_from_args, photo_summary, positive)
 from host_tools.sim.world import World
 
 
@@ -24,6 +25,7 @@ def add_arguments(parser):
     parser.add_argument("--yaw", type=float, default=0.0, help="yaw, degrees counter-clockwise (default 0)")
     parser.add_argument("--seed", type=int, default=None, help="world seed (default: the map's seed)")
     add_camera_arguments(parser)
+    add_appearance_arguments(parser)
     parser.add_argument("--out", required=True, help="output PNG")
 
 
@@ -34,13 +36,16 @@ def run(args):
     for name in ("x", "y", "yaw"):
         if not math.isfinite(getattr(args, name)):
             raise ForaNavError("--%s: must be finite" % name)
-    world = World.from_map(pmap, seed=args.seed)
+    spec, appearance = appearance_from_args(args, {t.species for t in pmap.trees}, "map %s" % args.map)
+    world = World.from_map(pmap, seed=args.seed, appearance=appearance)
     frame = world.render(camera, Pose(args.x, args.y, z, args.yaw), effects=EFFECT_PRESETS[args.effects])
     write_png(args.out, frame.image)
     for t in frame.trees:
         print("tree %d %s target=%s u=%.1f v=%.1f w=%.1f h=%.1f %s"
               % (t.id, t.species, str(t.target).lower(), t.u, t.v, t.w, t.h,
                  "complete" if t.complete else "partial"))
+    if photo_summary(world):
+        print(photo_summary(world))
     return 0
 
 

@@ -11,6 +11,8 @@ Layout of DIR:
                          complete tree (label = species) and object (roof, road_cross); frames without any are
                          listed with an empty label
 Same seed, same bytes. --species selects the target species (default oil_palm).
+--crowns CSV ... draws the trees of the species in those annotation CSVs from their photographs (the crown
+library, docs/simulator.md), scaled to the flight camera: crops and frames of real crowns at flight scale.
 """
 import csv
 import io
@@ -24,6 +26,7 @@ from host_tools import fileio
 from host_tools.annotations import Box, format_boxes
 from host_tools.errors import ForaNavError
 from host_tools.maps import SPECIES
+from host_tools.sim.cli_args import add_appearance_arguments, appearance_from_args
 from host_tools.sim.dataset import generate
 
 CROPS_HEADER = ("image", "class", "category")
@@ -36,6 +39,7 @@ def add_arguments(parser):
     parser.add_argument("--seed", type=int, default=0, help="seed (default 0)")
     parser.add_argument("--species", nargs="+", choices=SPECIES, default=["oil_palm"],
                         help="target species (default oil_palm)")
+    add_appearance_arguments(parser)
 
 
 def run(args):
@@ -45,7 +49,8 @@ def run(args):
     if frame_count < 0:
         raise ForaNavError("--frames: must not be negative")
     species = tuple(dict.fromkeys(args.species))
-    positives, negatives, frames = generate(args.seed, args.count, frame_count, species)
+    _, appearance = appearance_from_args(args, SPECIES, "the synth scenes")
+    positives, negatives, frames = generate(args.seed, args.count, frame_count, species, appearance=appearance)
     try:
         write_into(Path(args.out), positives, negatives, frames)
     except OSError as err:
@@ -53,6 +58,9 @@ def run(args):
     print("wrote %s: %d positive and %d negative crops (target %s), %d frames with %d boxes"
           % (args.out, len(positives), len(negatives), ", ".join(species), len(frames),
              sum(len(f.boxes) for f in frames)))
+    if appearance is not None and appearance.library is not None:
+        print("crowns from photos: %s" % ", ".join("%s (%d crowns)" % (s, appearance.library.count(s))
+                                                   for s in appearance.library.species))
     return 0
 
 
