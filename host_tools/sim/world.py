@@ -154,13 +154,15 @@ class World:
     # ---- building ------------------------------------------------------------------------------------
 
     @classmethod
-    def from_map(cls, pmap, seed=None, metres_per_pixel=None, margin_m=None, appearance=None):
+    def from_map(cls, pmap, seed=None, metres_per_pixel=None, margin_m=None, appearance=None, crown_trees=None):
         """Render the map's orthomosaic once. ``seed`` overrides the map's seed (ground and tree variation).
 
         ``metres_per_pixel`` sets the finest level (default: half a 352x288 pixel at the map altitude; use a
         finer one for 1280x1024 frames); ``margin_m`` the ground shown around the map's content (default: a
         camera footprint at the map altitude; beyond it the ground is mirrored). ``appearance``
-        (crowns.Appearance, optional): photo crowns for the species of its library and a ground photo.
+        (crowns.Appearance, optional): photo crowns for the species of its library and a ground photo;
+        ``crown_trees`` the trees the crowns are dealt to (default the map's; a map with a tree removed passes
+        the full map's, so every other tree keeps its crown).
         """
         seed = pmap.seed if seed is None else int(seed)
         mpp = metres_per_pixel or METRES_PER_PIXEL_PER_METRE_AT_352 * pmap.altitude_m / SUPERSAMPLING
@@ -178,7 +180,9 @@ class World:
             image = crowns.ground_from_photo(appearance.ground_photo, appearance.spec.ground_gsd_m, height, width,
                                              mpp, lighting.light)
         library = appearance.library if appearance is not None else None
-        photos = crowns.assign(library, pmap.trees, seed) if library is not None else {}
+        photos = crowns.assign(library, crown_trees or pmap.trees, seed) if library is not None else {}
+        drawn_ids = {t.id for t in pmap.trees}
+        photos = {i: p for i, p in photos.items() if i in drawn_ids}
         shadows = appearance.spec.crown_shadows if appearance is not None else False
         corners = _draw_map(image, pmap, seed, mpp, bounds, lighting, photos, shadows)
         levels = _pyramid(np.clip(image + 0.5, 0, 255).astype(np.uint8))
