@@ -1,11 +1,14 @@
 """Benchmarks that print figures: foranav bench {sim,detector,flight} [--json].
 
-sim:      rendered 352x288 camera frames per second on one core (plantation simulator).
+sim:      rendered 352x288 camera frames per second on one core (plantation simulator); with --crowns CSV ...
+          also over photo crowns, next to the procedural figures.
 flight:   simulated seconds per CPU second of an oracle flight (firmware emulation + app).
 detector: ms per frame and FPS of the tree detector at 352x288, 640x480 and 1280x1024, peak memory, and the
           speed-up over the per-window reference implementation.
 """
 import importlib
+
+from host_tools.sim.cli_args import add_appearance_arguments
 
 TARGETS = {
     "sim": "host_tools.sim.bench",
@@ -18,6 +21,7 @@ def add_arguments(parser):
     parser.add_argument("target", choices=sorted(TARGETS), help="what to benchmark")
     parser.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
     parser.add_argument("--seed", type=int, default=0, help="seed of the rendered test frames")
+    add_appearance_arguments(parser)  # bench sim: --crowns / --ground
 
 
 def run(args):

@@ -14,6 +14,10 @@ from host_tools.maps import PlantationMap, Tree
 from host_tools.sim.camera import CameraModel, Pose
 from host_tools.sim.crowns import AppearanceSpec, Appearance, assign, load_library
 from host_tools.sim.world import World
+from jevois_module.ForaNavTrees import MODULE_DIR as _MODULE_DIR
+from pathlib import Path
+
+MODULE_DIR = Path(_MODULE_DIR)
 
 # BGR colours of the library's crowns; the test finds them again in the rendered frames
 RED, MAGENTA, ORANGE, BLUE = (30, 30, 230), (230, 30, 230), (30, 140, 250), (230, 60, 30)
@@ -161,7 +165,7 @@ def test_that_a_ground_photo_is_tiled_at_its_ground_scale(tmp_path):
     cv2.imwrite(str(tmp_path / "ground.png"), stripes)
     library = write_library(tmp_path / "lib", [("oil_palm", RED)])
     spec = AppearanceSpec((str(library),), str(tmp_path / "ground.png"), 0.01)
-    world = World.from_map(one_tree_map([Tree(1, 5.0, 5.0, "oil_palm", 0.3, True)]), appearance=Appearance.load(spec))
+    world = World.from_map(one_tree_map([Tree(1, 0.8, 0.6, "oil_palm", 0.3, True)]), appearance=Appearance.load(spec))
     row = world.levels[0][world.levels[0].shape[0] // 2, :, 1].astype(float)
     bright = row > row.mean()
     period_px = 2 * len(bright) / max(1, np.count_nonzero(np.diff(bright.astype(int))))
@@ -253,3 +257,15 @@ def test_that_synth_with_crowns_writes_frames_of_photo_crowns(tmp_path, capsys):
                for p in crops)
     for p in frames + crops:
         assert p.read_bytes() == (tmp_path / "b" / p.relative_to(tmp_path / "a")).read_bytes()
+
+
+def test_that_the_vision_camera_runs_the_module_with_the_given_model_file(tmp_path):
+    from host_tools.flight.vision_camera import VisionCamera, model_option
+    from host_tools.maps import load_map
+
+    model = tmp_path / "my_model.npz"
+    model.write_bytes((MODULE_DIR / "foranav_olive.npz").read_bytes())
+    camera = VisionCamera(load_map("map1"), model=model_option(model))
+    camera.capture(0, (1.0, 0.45, 1.4, 0.0))
+    assert camera.runner.getpar("species") == str(model.resolve())
+    assert camera.runner.instance.model.species == "olive"  # the file's, not the map's target species

@@ -20,6 +20,7 @@ def plot_trajectory(flight, path):
     photos = world is not None and bool(world.photo_crowns)
     if photos:  # the map as the camera saw it: photo crowns under the track (outlined, not filled)
         show_mosaic(ax, world)
+        _zoom_to_content(ax, pmap)
     reached_ids = {r["id"] for r in flight.reached}
     for tree in pmap.trees:
         kind = "target" if tree.target else "non_target"
@@ -68,8 +69,14 @@ def show_mosaic(ax, world, level=None):
     x_min, x_max, y_min, y_max = world.bounds
     ax.imshow(image.transpose(1, 0, 2)[:, ::-1], extent=(x_min, x_max, y_min, y_max), origin="upper",
               interpolation="bilinear", zorder=0)
-    ax.set_xlim(x_min, x_max)
-    ax.set_ylim(y_min, y_max)
+
+
+def _zoom_to_content(ax, pmap, margin_m=0.4):
+    """Limits around the path, trees and objects (the mosaic reaches a camera footprint beyond them)."""
+    xs = [p[0] for p in pmap.waypoints] + [t.x for t in pmap.trees] + [o.x for o in pmap.objects]
+    ys = [p[1] for p in pmap.waypoints] + [t.y for t in pmap.trees] + [o.y for o in pmap.objects]
+    ax.set_xlim(min(xs) - margin_m, max(xs) + margin_m)
+    ax.set_ylim(min(ys) - margin_m, max(ys) + margin_m)
 
 
 def save_map_figure(fig, ax, title, path):
