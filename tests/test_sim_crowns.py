@@ -269,3 +269,29 @@ def test_that_the_vision_camera_runs_the_module_with_the_given_model_file(tmp_pa
     camera.capture(0, (1.0, 0.45, 1.4, 0.0))
     assert camera.runner.getpar("species") == str(model.resolve())
     assert camera.runner.instance.model.species == "olive"  # the file's, not the map's target species
+
+
+def test_that_the_trajectory_plot_shows_the_photo_crowns_where_the_trees_are(tmp_path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from host_tools.flight.plot import show_mosaic
+
+    library = write_library(tmp_path / "lib", [("oil_palm", RED)])
+    tree = Tree(1, 0.5, 0.3, "oil_palm", 0.4, True)
+    world = World.from_map(one_tree_map([tree]), appearance=appearance([library]))
+    fig, ax = plt.subplots()
+    show_mosaic(ax, world, level=0)
+    image = np.asarray(ax.images[0].get_array())
+    x0, x1, y0, y1 = ax.images[0].get_extent()
+    plt.close(fig)
+
+    def rgb_at(x, y):  # plot x to the right, y up
+        return image[int((y1 - y) / (y1 - y0) * image.shape[0]), int((x - x0) / (x1 - x0) * image.shape[1])]
+
+    assert np.all(np.abs(rgb_at(tree.x, tree.y).astype(int) - np.array(RED[::-1])) <= COLOUR_TOLERANCE)
+    # a crown's width away the ground shows, in every direction
+    for dx, dy in ((0.4, 0.0), (-0.4, 0.0), (0.0, 0.4), (0.0, -0.4)):
+        assert not np.all(np.abs(rgb_at(tree.x + dx, tree.y + dy).astype(int) - np.array(RED[::-1]))
+                          <= COLOUR_TOLERANCE)
