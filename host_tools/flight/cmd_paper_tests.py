@@ -78,7 +78,7 @@ def run(args):
     results = paper_tests.run_tests(tests, out_dir=args.out, jobs=args.jobs, on_result=on_result,
                                     camera_kwargs=camera_kwargs)
     wall = round(time.monotonic() - started, 1)
-    paths = paper_tests.write_outputs(results, Path(args.out), wall_s=wall)
+    paths = paper_tests.write_outputs(results, Path(args.out), wall_s=wall, appearance=camera_kwargs.get("appearance"))
     if args.json:
         print(json.dumps({"tests": results}, indent=2))
     else:

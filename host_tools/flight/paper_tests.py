@@ -125,11 +125,16 @@ def table(results):
     return lines
 
 
-def write_outputs(results, out_dir, wall_s=None):
+def write_outputs(results, out_dir, wall_s=None, appearance=None):
     """results.json, table.md, deviation.png (Fig. 8) and <map>_tests.png (Figs. 6-7, from the tests' tlogs)
-    in ``out_dir`` -> their paths."""
+    in ``out_dir`` -> their paths. ``appearance`` (the AppearanceSpec dict the tests flew with): the map
+    figures show the world's mosaic (the photo crowns) under the trajectories."""
     from host_tools.flight.figures import plot_deviation, plot_map_tests, read_ground_truth_track
     from host_tools.maps import load_map
+    from host_tools.sim.crowns import AppearanceSpec, load_appearance
+    from host_tools.sim.world import World
+
+    look = load_appearance(AppearanceSpec.from_dict(appearance)) if appearance else None
 
     out_dir = Path(out_dir)
     paths = {"results": out_dir / "results.json", "table": out_dir / "table.md", "plot": out_dir / "deviation.png"}
@@ -141,6 +146,8 @@ def write_outputs(results, out_dir, wall_s=None):
         if entries:
             key = "map_%s" % Path(map_name).stem
             paths[key] = out_dir / ("%s_tests.png" % Path(map_name).stem)
-            plot_map_tests(load_map(map_name), entries, [read_ground_truth_track(e["tlog"]) for e in entries],
-                           paths[key])
+            pmap = load_map(map_name)
+            world = World.from_map(pmap, appearance=look) if look is not None else None
+            plot_map_tests(pmap, entries, [read_ground_truth_track(e["tlog"]) for e in entries], paths[key],
+                           world=world)
     return {k: str(v) for k, v in paths.items()}

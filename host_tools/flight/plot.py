@@ -20,7 +20,7 @@ def plot_trajectory(flight, path):
     photos = world is not None and bool(world.photo_crowns)
     if photos:  # the map as the camera saw it: photo crowns under the track (outlined, not filled)
         show_mosaic(ax, world)
-        _zoom_to_content(ax, pmap)
+        zoom_to_content(ax, pmap)
     reached_ids = {r["id"] for r in flight.reached}
     for tree in pmap.trees:
         kind = "target" if tree.target else "non_target"
@@ -71,7 +71,7 @@ def show_mosaic(ax, world, level=None):
               interpolation="bilinear", zorder=0)
 
 
-def _zoom_to_content(ax, pmap, margin_m=0.4):
+def zoom_to_content(ax, pmap, margin_m=0.4):
     """Limits around the path, trees and objects (the mosaic reaches a camera footprint beyond them)."""
     xs = [p[0] for p in pmap.waypoints] + [t.x for t in pmap.trees] + [o.x for o in pmap.objects]
     ys = [p[1] for p in pmap.waypoints] + [t.y for t in pmap.trees] + [o.y for o in pmap.objects]
