@@ -25,6 +25,7 @@ Ground (``--ground IMAGE --ground-gsd M_PER_PX``): the photo scaled to the mosai
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Optional, Sequence
 
 import cv2
 import numpy as np
@@ -42,7 +43,7 @@ _SPECIES_STREAM = 3  # rng stream kinds (world.py uses 1 for trees, 2 for object
 _ANGLE_STREAM = 4
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)  # compared by identity: the patch is an array
 class Crown:
     """One usable crown: its cut-out (the box's pixels, BGR uint8) and where it came from."""
     species: str
@@ -74,7 +75,7 @@ class CrownLibrary:
                                   skipped))
 
 
-def load_library(csv_paths, min_crown_px=MIN_CROWN_PX):
+def load_library(csv_paths: Sequence, min_crown_px: float = MIN_CROWN_PX) -> CrownLibrary:
     """Read the CSVs and cut out every usable crown; ForaNavError naming the file and line on bad input."""
     crowns, skipped = {}, {}
     for csv_path in csv_paths:
@@ -121,7 +122,7 @@ def _read_image(path, csv_path, line_no):
     return image
 
 
-def assign(library, trees, seed):
+def assign(library: CrownLibrary, trees: Sequence, seed: int) -> dict:
     """{tree id: (Crown, angle_rad)} for the trees whose species the library has (deterministic, see top)."""
     out = {}
     for species in library.species:
@@ -134,7 +135,7 @@ def assign(library, trees, seed):
     return out
 
 
-def soft_mask(height, width, feather=MASK_FEATHER):
+def soft_mask(height: int, width: int, feather: float = MASK_FEATHER) -> np.ndarray:
     """HxW float32: 1 inside the ellipse inscribed in the box, fading to 0 at its edge (smoothstep)."""
     ys = (np.arange(height, dtype=np.float32) + 0.5 - height / 2.0) / (height / 2.0)
     xs = (np.arange(width, dtype=np.float32) + 0.5 - width / 2.0) / (width / 2.0)
@@ -143,7 +144,8 @@ def soft_mask(height, width, feather=MASK_FEATHER):
     return (t * t * (3.0 - 2.0 * t)).astype(np.float32)
 
 
-def crown_sprite(crown, col, row, diameter_px, angle_rad, light=1.0):
+def crown_sprite(crown: Crown, col: float, row: float, diameter_px: float, angle_rad: float,
+                 light: float = 1.0) -> Sprite:
     """The crown's cut-out scaled so its box (mean of width and height) spans ``diameter_px``, rotated by
     ``angle_rad`` about its centre and centred at the continuous image position (col, row) -> Sprite."""
     patch = crown.patch.astype(np.float32) * np.float32(light)
@@ -175,7 +177,7 @@ def crown_sprite(crown, col, row, diameter_px, angle_rad, light=1.0):
     return Sprite(premultiplied.astype(np.float32), alpha.astype(np.float32), origin)
 
 
-def load_ground(path):
+def load_ground(path) -> np.ndarray:
     """The ground photo (BGR uint8); ForaNavError naming the file when it does not load."""
     image = cv2.imread(str(path), cv2.IMREAD_COLOR)
     if image is None or image.size == 0:
@@ -183,7 +185,8 @@ def load_ground(path):
     return image
 
 
-def ground_from_photo(photo, gsd_m, height, width, metres_per_pixel, light=1.0):
+def ground_from_photo(photo: np.ndarray, gsd_m: float, height: int, width: int, metres_per_pixel: float,
+                      light: float = 1.0) -> np.ndarray:
     """HxWx3 float32: the photo at the mosaic's resolution, tiled with mirrored copies, times ``light``."""
     scale = gsd_m / metres_per_pixel
     size = (max(1, int(round(photo.shape[1] * scale))), max(1, int(round(photo.shape[0] * scale))))
@@ -199,8 +202,8 @@ def ground_from_photo(photo, gsd_m, height, width, metres_per_pixel, light=1.0):
 class AppearanceSpec:
     """What the command line asked for (paths only: cheap to send to worker processes)."""
     crowns: tuple = ()  # CSV paths
-    ground: str = None
-    ground_gsd_m: float = None
+    ground: Optional[str] = None
+    ground_gsd_m: Optional[float] = None
     crown_shadows: bool = False
 
     @property
@@ -222,8 +225,8 @@ class AppearanceSpec:
 class Appearance:
     """A loaded AppearanceSpec: the crown library and the ground photo, ready for World.from_map."""
     spec: AppearanceSpec
-    library: CrownLibrary = None
-    ground_photo: np.ndarray = None
+    library: Optional[CrownLibrary] = None
+    ground_photo: Optional[np.ndarray] = None
 
     @classmethod
     def load(cls, spec):
@@ -239,7 +242,7 @@ class Appearance:
 _LOADED = {}
 
 
-def load_appearance(spec):
+def load_appearance(spec: Optional[AppearanceSpec]) -> Optional[Appearance]:
     """The Appearance of a spec, loaded once per process (worlds of the same flight share the cut-outs)."""
     if spec is None or spec.default:
         return None
