@@ -295,3 +295,23 @@ def test_that_the_trajectory_plot_shows_the_photo_crowns_where_the_trees_are(tmp
     for dx, dy in ((0.4, 0.0), (-0.4, 0.0), (0.0, 0.4), (0.0, -0.4)):
         assert not np.all(np.abs(rgb_at(tree.x + dx, tree.y + dy).astype(int) - np.array(RED[::-1]))
                           <= COLOUR_TOLERANCE)
+
+
+def test_that_photo_crowns_cast_a_shadow_only_when_asked(tmp_path):
+    library = write_library(tmp_path / "lib", [("oil_palm", RED)])
+    pmap = one_tree_map([Tree(1, 0.0, 0.0, "oil_palm", 0.4, True)])
+    plain = World.from_map(pmap, appearance=Appearance.load(AppearanceSpec((str(library),))))
+    shaded = World.from_map(pmap, appearance=Appearance.load(AppearanceSpec((str(library),), crown_shadows=True)))
+    red = colour_mask(plain.levels[0], RED)
+    outside = ~cv2.dilate(red.astype(np.uint8), np.ones((9, 9), np.uint8)).astype(bool)
+    darker = plain.levels[0].astype(int).sum(axis=2) - shaded.levels[0].astype(int).sum(axis=2)
+    assert (darker[outside] > 30).sum() > 500  # a shadow on the ground beside the crown
+    assert (darker[outside] < 0).sum() == 0
+
+
+def test_that_paper_tests_refuse_a_bad_library_before_flying(tmp_path, capsys):
+    library = write_library(tmp_path / "lib", [("mango", ORANGE)])
+    out = tmp_path / "paper"
+    assert main(["paper-tests", "--crowns", str(library), "--out", str(out)]) == 2
+    assert "no usable crown" in capsys.readouterr().err
+    assert not out.exists()
