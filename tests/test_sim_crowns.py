@@ -4,6 +4,7 @@ Every test builds its own tiny crown library: a rendered "aerial photo" (crowns 
 texture, neighbours of another colour reaching into each box's corners) written as a PNG plus boxes.csv.
 """
 import math
+from pathlib import Path
 
 import cv2
 import numpy as np
@@ -12,12 +13,11 @@ import pytest
 from host_tools.cli import main
 from host_tools.maps import PlantationMap, Tree
 from host_tools.sim.camera import CameraModel, Pose
-from host_tools.sim.crowns import AppearanceSpec, Appearance, assign, load_library
+from host_tools.sim.crowns import Appearance, AppearanceSpec, assign, load_library
 from host_tools.sim.world import World
-from jevois_module.ForaNavTrees import MODULE_DIR as _MODULE_DIR
-from pathlib import Path
+from jevois_module.ForaNavTrees import MODULE_DIR as MODULE_FOLDER
 
-MODULE_DIR = Path(_MODULE_DIR)
+MODULE_DIR = Path(MODULE_FOLDER)
 
 # BGR colours of the library's crowns; the test finds them again in the rendered frames
 RED, MAGENTA, ORANGE, BLUE = (30, 30, 230), (230, 30, 230), (30, 140, 250), (230, 60, 30)
