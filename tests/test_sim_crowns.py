@@ -264,11 +264,11 @@ def test_that_the_vision_camera_runs_the_module_with_the_given_model_file(tmp_pa
     from host_tools.maps import load_map
 
     model = tmp_path / "my_model.npz"
-    model.write_bytes((MODULE_DIR / "foranav_olive.npz").read_bytes())
+    model.write_bytes((MODULE_DIR / "foranav_citrus.npz").read_bytes())
     camera = VisionCamera(load_map("map1"), model=model_option(model))
     camera.capture(0, (1.0, 0.45, 1.4, 0.0))
     assert camera.runner.getpar("species") == str(model.resolve())
-    assert camera.runner.instance.model.species == "olive"  # the file's, not the map's target species
+    assert camera.runner.instance.model.species == "citrus"  # the file's, not the map's target species
 
 
 def test_that_the_trajectory_plot_shows_the_photo_crowns_where_the_trees_are(tmp_path):
