@@ -1,6 +1,7 @@
 """Benchmarks that print figures: foranav bench {sim,detector,flight,sweep} [--json].
 
-sim:      rendered 352x288 camera frames per second on one core (plantation simulator).
+sim:      rendered 352x288 camera frames per second on one core (plantation simulator); with --crowns CSV ...
+          also over photo crowns, next to the procedural figures.
 flight:   simulated seconds per CPU second of an oracle flight (firmware emulation + app).
 detector: ms per frame and FPS of the tree detector at 352x288, 640x480 and 1280x1024, peak memory, and the
           speed-up over the per-window reference implementation.
@@ -9,6 +10,7 @@ sweep:    flights per CPU-second and the 1 -> 2 Dask worker speed-up (--camera s
 import importlib
 
 from host_tools import argtypes
+from host_tools.sim.cli_args import add_appearance_arguments
 
 TARGETS = {
     "sim": "host_tools.sim.bench",
@@ -25,6 +27,7 @@ def add_arguments(parser):
     parser.add_argument("--camera", choices=("sim", "oracle"), default=None, help="sweep: camera (default sim)")
     parser.add_argument("--count", type=argtypes.int_range(1, 100000), default=None,
                         help="sweep: flights per worker count (default 6)")
+    add_appearance_arguments(parser)  # bench sim: --crowns / --ground
 
 
 def run(args):

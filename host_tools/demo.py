@@ -22,6 +22,10 @@ TAKEOFF_AND_LANDING_S = 10.0
 def add_arguments(parser):
     parser.add_argument("--out", default="runs/demo", help="output folder (default runs/demo/)")
     parser.add_argument("--seed", type=argtypes.seed, default=DEMO_SEED, help="seed of every random choice (default 0)")
+    parser.add_argument("--model", metavar="M", default=None,
+                        help="the module runs with this model file (.npz) (default: the oil palm model)")
+    from host_tools.sim.cli_args import add_appearance_arguments
+    add_appearance_arguments(parser)
 
 
 def estimated_mission_s(pmap, cruise_speed):
@@ -65,15 +69,20 @@ def run(args):
     from crazyflie_app.navigation_core import NavigationParams
     from host_tools.flight.cmd_fly import print_table
     from host_tools.flight.harness import run_flight
-    from host_tools.flight.vision_camera import VisionCamera
+    from host_tools.flight.vision_camera import VisionCamera, model_option
     from host_tools.maps import load_map
+    from host_tools.sim.cli_args import appearance_from_args, photo_summary
 
     out = fileio.check_output_dir(Path(args.out))
     pmap = load_map(DEMO_MAP)
+    spec, _ = appearance_from_args(args, {t.species for t in pmap.trees}, "map %s" % DEMO_MAP)
+    model = model_option(args.model) if args.model is not None else None
     print("ForaNav demo: %s" % pmap.name)
     print("  camera: simulator -> JeVois module (ForaNavTrees, unchanged) -> pty -> Crazyflie app (pyserial)")
     started = time.monotonic()
-    camera = VisionCamera(pmap, seed=args.seed)
+    camera = VisionCamera(pmap, seed=args.seed, appearance=None if spec.default else spec, model=model)
+    if photo_summary(camera.world):
+        print("  " + photo_summary(camera.world))
     bar = _Bar(estimated_mission_s(pmap, NavigationParams().cruise_speed), sys.stdout)
     summary = run_flight(pmap, camera, seed=args.seed, out_dir=out, progress=bar)
     bar.finish(summary["mission_time_s"])

@@ -22,6 +22,7 @@ Examples:
   foranav fly --map map1 --camera oracle
   foranav fly --map map2 --camera oracle --dropout 0.3 --json
   foranav fly --map map3 --camera oracle --hide-tree 6 --hide-s 5 --mavlink udpout:127.0.0.1:14550
+  foranav fly --map map1 --crowns ../shared/data/real/oilpalm_gearth_detectree2/boxes.csv --model real.npz
 """
 import json
 import math
@@ -31,6 +32,8 @@ from pathlib import Path
 
 from host_tools import argtypes, fileio
 from host_tools.errors import ForaNavError
+from host_tools.flight.vision_camera import model_option
+from host_tools.sim.cli_args import add_appearance_arguments, appearance_from_args
 
 CAMERA_CHOICES = ("oracle", "sim")
 PROGRESS_EVERY_S = 5.0  # wall-clock seconds between progress lines on stderr
@@ -78,6 +81,10 @@ def add_arguments(parser):
     parser.add_argument("--wind", type=argtypes.float_range(0.0, 20.0), default=0.0,
                         help="wind gust acceleration std (m/s^2)")
     parser.add_argument("--mavlink", help="also stream the telemetry live, e.g. udpout:127.0.0.1:14550")
+    parser.add_argument("--model", metavar="M", default=None,
+                        help="sim: the module runs with this model file (.npz), as the camera does with its "
+                             "species parameter set to a model file (default: the map's target species model)")
+    add_appearance_arguments(parser)
 
 
 def _options(args):
@@ -166,6 +173,8 @@ def print_table(summary, out=None):
         print("  camera %.1f fps: %s detections per frame; %d true, %d false, %d missed (recall %s, precision %s)"
               % (fps, vision["detections_per_frame"], vision["true_positives"], vision["false_positives"],
                  vision["missed"], vision["recall"], vision["precision"]), file=out)
+        if vision.get("photo_species"):
+            print("  crowns from photos: %s" % ", ".join(vision["photo_species"]), file=out)
     if summary.get("link_losses") or summary.get("link_aborted"):
         print("  camera link lost %d time(s)%s" % (summary["link_losses"], "; LANDED: link dead"
                                                     if summary["link_aborted"] else ""), file=out)
@@ -190,6 +199,13 @@ def run(args):
         raise ForaNavError("--hide-tree: map %s has no tree %d (its trees: %s)" % (
             args.map, args.hide_tree, ", ".join(str(tree.id) for tree in pmap.trees)))
     kwargs = _camera_kwargs(args)
+    spec, _ = appearance_from_args(args, {t.species for t in pmap.trees}, "map %s" % args.map)
+    if (not spec.default or args.model is not None) and args.camera != "sim":
+        raise ForaNavError("--crowns/--ground/--model: only with --camera sim (the oracle sees no pixels)")
+    if not spec.default:
+        kwargs["appearance"] = spec.to_dict()
+    if args.model is not None:
+        kwargs["model"] = model_option(args.model)
     if args.realtime:
         camera = None
     else:

@@ -11,6 +11,7 @@ Examples:
   foranav paper-tests
   foranav paper-tests --out runs/paper --json
   foranav paper-tests --tests 3,6 --jobs 1
+  foranav paper-tests --crowns ../shared/data/real/oilpalm_gearth_detectree2/boxes.csv --model real.npz
 """
 import json
 import sys
@@ -19,6 +20,7 @@ from pathlib import Path
 
 from host_tools import argtypes, fileio
 from host_tools.errors import ForaNavError
+from host_tools.sim.cli_args import add_appearance_arguments, appearance_from_args
 
 
 def add_arguments(parser):
@@ -28,6 +30,9 @@ def add_arguments(parser):
     parser.add_argument("--tests", help="comma-separated test numbers to run (default: 1-9)")
     parser.add_argument("--jobs", type=argtypes.int_range(1, 256), default=None,
                         help="flights in parallel (default: one per CPU)")
+    parser.add_argument("--model", metavar="M", default=None,
+                        help="the module runs with this model file (.npz) (default: the maps' target species model)")
+    add_appearance_arguments(parser)
 
 
 def _selected(text):
@@ -45,6 +50,19 @@ def _selected(text):
     return tuple(t for t in PAPER_TESTS if t.number in wanted)
 
 
+def _camera_kwargs(args, tests):
+    """--crowns/--ground/--model, checked once here (the workers load them again)."""
+    from host_tools.flight.vision_camera import model_option
+    from host_tools.maps import load_map
+
+    species = {t.species for test in tests for t in load_map(test.map).trees}
+    spec, _ = appearance_from_args(args, species, "the paper maps")
+    kwargs = {} if spec.default else {"appearance": spec.to_dict()}
+    if args.model is not None:
+        kwargs["model"] = model_option(args.model)
+    return kwargs
+
+
 def run(args):
     from host_tools.flight import paper_tests
 
@@ -52,6 +70,7 @@ def run(args):
     fileio.check_output_dir(args.out)
     if args.jobs is not None and args.jobs < 1:
         raise ForaNavError("--jobs: must be at least 1")
+    camera_kwargs = _camera_kwargs(args, tests)
     started = time.monotonic()
 
     def on_result(entry):
@@ -59,9 +78,10 @@ def run(args):
             print("  Test %d (%s): %s in %.0f s" % (entry["test"], entry["map"], "pass" if entry["passed"]
                                                    else "FAIL", entry["wall_s"]), file=sys.stderr)
 
-    results = paper_tests.run_tests(tests, out_dir=args.out, jobs=args.jobs, on_result=on_result)
+    results = paper_tests.run_tests(tests, out_dir=args.out, jobs=args.jobs, on_result=on_result,
+                                    camera_kwargs=camera_kwargs)
     wall = round(time.monotonic() - started, 1)
-    paths = paper_tests.write_outputs(results, Path(args.out), wall_s=wall)
+    paths = paper_tests.write_outputs(results, Path(args.out), wall_s=wall, appearance=camera_kwargs.get("appearance"))
     if args.json:
         print(json.dumps({"tests": results}, indent=2))
     else:

@@ -6,7 +6,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 from host_tools import fileio  # noqa: E402
-from host_tools.flight.plot import save_map_figure  # noqa: E402
+from host_tools.flight.plot import save_map_figure, show_mosaic, zoom_to_content  # noqa: E402
 from host_tools.flight.stats import mean_ci95  # noqa: E402
 
 PAPER_BOUND_M = 0.10  # the paper: mean deviation below 0.1 m in every test
@@ -77,25 +77,31 @@ def read_ground_truth_track(tlog_path):
         log.close()
 
 
-def plot_map_tests(pmap, entries, tracks, path):
+def plot_map_tests(pmap, entries, tracks, path, world=None):
     """The paper's Figs. 6-7: one map with the flown trajectories of its tests overlaid.
 
     ``entries``: the tests' summaries (with "test", "reached", "missed_targets", "non_targets_visited");
     ``tracks``: per entry, [(x, y)] of the true trajectory. A target is green when every test reached it,
-    orange when one missed it; a non-target is red when some test visited it.
+    orange when one missed it; a non-target is red when some test visited it. ``world`` (with photo crowns):
+    its mosaic is drawn under the map, the trees outlined.
     """
     from matplotlib.patches import Circle
 
     missed = {i for e in entries for i in e["missed_targets"]}
     visited_non_targets = {i for e in entries for i in e["non_targets_visited"]}
     fig, ax = plt.subplots(figsize=(8, 3.9), dpi=110)
+    photos = world is not None and bool(world.photo_crowns)
+    if photos:
+        show_mosaic(ax, world)
+        zoom_to_content(ax, pmap)
     for tree in pmap.trees:
         if tree.target:
             kind = "missed" if tree.id in missed else "reached"
         else:
             kind = "visited_non_target" if tree.id in visited_non_targets else "non_target"
-        ax.add_patch(Circle((tree.x, tree.y), tree.crown_m / 2, facecolor=TREE_COLOURS[kind], alpha=0.3,
-                            edgecolor=TREE_COLOURS[kind]))
+        ax.add_patch(Circle((tree.x, tree.y), tree.crown_m / 2, facecolor="none" if photos else TREE_COLOURS[kind],
+                            alpha=0.9 if photos else 0.3, edgecolor=TREE_COLOURS[kind],
+                            linewidth=1.5 if photos else 1.0))
         label = str(tree.id) if tree.species == pmap.target_species else "%d %s" % (tree.id, tree.species)
         ax.annotate(label, (tree.x, tree.y + tree.crown_m / 2 + 0.03), ha="center", fontsize=7)
     for obj in pmap.objects:

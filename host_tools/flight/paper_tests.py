@@ -69,8 +69,10 @@ def passed(summary):
     return all(criteria(summary).values())
 
 
-def fly_test(test, out_dir=None, map_path=None):
-    """Fly one PaperTest -> the fly summary plus "test", "map", "situation", "passed", "wall_s"."""
+def fly_test(test, out_dir=None, map_path=None, camera_kwargs=None):
+    """Fly one PaperTest -> the fly summary plus "test", "map", "situation", "passed", "wall_s".
+
+    ``camera_kwargs``: extra VisionCamera arguments (appearance, model) from the command line."""
     from host_tools.flight.vision_camera import fly_with_vision
     from host_tools.maps import load_map
 
@@ -79,20 +81,21 @@ def fly_test(test, out_dir=None, map_path=None):
     options = {"max_time_s": MAX_TIME_S}
     options.update(test.options)
     summary = fly_with_vision(pmap, seed=test.seed, options=options,
-                              out_dir=None if out_dir is None else Path(out_dir) / ("test%d" % test.number))
+                              out_dir=None if out_dir is None else Path(out_dir) / ("test%d" % test.number),
+                              **(camera_kwargs or {}))
     summary.update(test=test.number, map=test.map, situation=test.situation, passed=passed(summary),
                    wall_s=round(time.monotonic() - started, 1))
     return summary
 
 
-def run_tests(tests=PAPER_TESTS, out_dir=None, jobs=None, on_result=None):
+def run_tests(tests=PAPER_TESTS, out_dir=None, jobs=None, on_result=None, camera_kwargs=None):
     """Fly ``tests`` (in test order in the result); ``on_result(entry)`` is called as each one finishes."""
     jobs = max(1, min(len(tests), jobs or os.cpu_count() or 1))
     # The workers are fresh interpreters (spawn): importing host_tools limits their BLAS threads before numpy.
     by_number = {}
     context = multiprocessing.get_context("spawn")
     with concurrent.futures.ProcessPoolExecutor(max_workers=jobs, mp_context=context) as pool:
-        futures = [pool.submit(fly_test, test, out_dir) for test in tests]
+        futures = [pool.submit(fly_test, test, out_dir, None, camera_kwargs) for test in tests]
         for future in concurrent.futures.as_completed(futures):
             entry = future.result()
             by_number[entry["test"]] = entry
@@ -122,11 +125,16 @@ def table(results):
     return lines
 
 
-def write_outputs(results, out_dir, wall_s=None):
+def write_outputs(results, out_dir, wall_s=None, appearance=None):
     """results.json, table.md, deviation.png (Fig. 8) and <map>_tests.png (Figs. 6-7, from the tests' tlogs)
-    in ``out_dir`` -> their paths."""
+    in ``out_dir`` -> their paths. ``appearance`` (the AppearanceSpec dict the tests flew with): the map
+    figures show the world's mosaic (the photo crowns) under the trajectories."""
     from host_tools.flight.figures import plot_deviation, plot_map_tests, read_ground_truth_track
     from host_tools.maps import load_map
+    from host_tools.sim.crowns import AppearanceSpec, load_appearance
+    from host_tools.sim.world import World
+
+    look = load_appearance(AppearanceSpec.from_dict(appearance)) if appearance else None
 
     out_dir = Path(out_dir)
     paths = {"results": out_dir / "results.json", "table": out_dir / "table.md", "plot": out_dir / "deviation.png"}
@@ -138,6 +146,8 @@ def write_outputs(results, out_dir, wall_s=None):
         if entries:
             key = "map_%s" % Path(map_name).stem
             paths[key] = out_dir / ("%s_tests.png" % Path(map_name).stem)
-            plot_map_tests(load_map(map_name), entries, [read_ground_truth_track(e["tlog"]) for e in entries],
-                           paths[key])
+            pmap = load_map(map_name)
+            world = World.from_map(pmap, appearance=look) if look is not None else None
+            plot_map_tests(pmap, entries, [read_ground_truth_track(e["tlog"]) for e in entries], paths[key],
+                           world=world)
     return {k: str(v) for k, v in paths.items()}

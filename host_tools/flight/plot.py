@@ -16,10 +16,16 @@ def plot_trajectory(flight, path):
     """Draw ``flight`` (a harness _Flight after its run) into the PNG ``path`` (atomic write)."""
     pmap = flight.pmap
     fig, ax = plt.subplots(figsize=(8, 3.6), dpi=110)
+    world = getattr(flight.camera, "world", None)
+    photos = world is not None and bool(world.photo_crowns)
+    if photos:  # the map as the camera saw it: photo crowns under the track (outlined, not filled)
+        show_mosaic(ax, world)
+        zoom_to_content(ax, pmap)
     reached_ids = {r["id"] for r in flight.reached}
     for tree in pmap.trees:
         kind = "target" if tree.target else "non_target"
-        ax.add_patch(Circle((tree.x, tree.y), tree.crown_m / 2, facecolor=COLOURS[kind], alpha=0.25,
+        ax.add_patch(Circle((tree.x, tree.y), tree.crown_m / 2, facecolor="none" if photos else COLOURS[kind],
+                            alpha=0.8 if photos else 0.25,
                             edgecolor=COLOURS["reached"] if tree.id in reached_ids else COLOURS[kind],
                             linewidth=2.0 if tree.id in reached_ids else 1.0))
         ax.annotate(str(tree.id), (tree.x, tree.y + tree.crown_m / 2 + 0.03), ha="center", fontsize=8)
@@ -51,6 +57,26 @@ def plot_trajectory(flight, path):
     ax.plot([], [], "o", color=COLOURS["target"], alpha=0.4, label="target tree")
     ax.plot([], [], "o", color=COLOURS["non_target"], alpha=0.4, label="non-target tree")
     save_map_figure(fig, ax, pmap.name.split(":")[0] + " - seed %d" % flight.seed, path)
+
+
+def show_mosaic(ax, world, level=None):
+    """Draw a World's orthomosaic under a top-down plot (x right, y up, metres).
+
+    Mosaic rows run along -x and columns along -y (host_tools/sim/world.py): transposed and mirrored for the plot.
+    """
+    level = len(world.levels) - 1 if level is None else level
+    image = world.levels[level][..., ::-1]  # BGR -> RGB
+    x_min, x_max, y_min, y_max = world.bounds
+    ax.imshow(image.transpose(1, 0, 2)[:, ::-1], extent=(x_min, x_max, y_min, y_max), origin="upper",
+              interpolation="bilinear", zorder=0)
+
+
+def zoom_to_content(ax, pmap, margin_m=0.4):
+    """Limits around the path, trees and objects (the mosaic reaches a camera footprint beyond them)."""
+    xs = [p[0] for p in pmap.waypoints] + [t.x for t in pmap.trees] + [o.x for o in pmap.objects]
+    ys = [p[1] for p in pmap.waypoints] + [t.y for t in pmap.trees] + [o.y for o in pmap.objects]
+    ax.set_xlim(min(xs) - margin_m, max(xs) + margin_m)
+    ax.set_ylim(min(ys) - margin_m, max(ys) + margin_m)
 
 
 def save_map_figure(fig, ax, title, path):

@@ -12,19 +12,28 @@ sees bare ground where the tree was (a temporary occlusion), not a filtered outp
 
 ``pixel_noise_px`` (default 0) adds Gaussian jitter to the centres the module reports (a fault on top of
 the rendered sensor noise); frames are scored on what is sent.
+Appearance (``appearance``: a crowns.AppearanceSpec or its dict): photo crowns and a ground photo, loaded once
+per process and rendered into the orthomosaic once per flight. ``model`` (a .npz path): the module runs with
+that model file, as the JeVois does with its ``species`` parameter set to a model file (the module joins the
+name to its folder, so an absolute path loads that file).
 
 Every frame is scored against the simulator's ground truth (``DetectionScore``); ``report()`` gives the
 totals (detections per frame, true/false positives, misses, pixel error) for the flight summary.
 """
 import dataclasses
 import math
+from pathlib import Path
 
 import numpy as np
 
+from host_tools.errors import ForaNavError
 from host_tools.flight.harness import register_camera
 from host_tools.sim.camera import CameraModel, Pose
+from host_tools.sim.crowns import AppearanceSpec, load_appearance
 from host_tools.sim.world import NO_EFFECTS, SENSOR_EFFECTS, World
 from jevois_module.ForaNavTrees import foranav_serial
+
+import foranav_model  # noqa: E402  (the camera's own module: jevois_module.ForaNavTrees put it on sys.path)
 
 PAPER_FPS = 9.0  # the paper: 8.9 fps on the JeVois-A33
 DEFAULT_FRAME_PERIOD_MS = int(round(1000.0 / PAPER_FPS))  # 111 ms
@@ -120,7 +129,8 @@ class VisionCamera(object):
 
     def __init__(self, pmap, *, seed=0, frame_period_ms=DEFAULT_FRAME_PERIOD_MS, latency_ms=None,
                  effects=DEFAULT_EFFECTS, width=352, height=288, mount_offset=(0.0, 0.0), module_params=None,
-                 world=None, serial_stream=None, log_stream=None, pixel_noise_px=0.0):
+                 world=None, serial_stream=None, log_stream=None, pixel_noise_px=0.0, appearance=None,
+                 model=None):
         if frame_period_ms <= 0:
             raise ValueError("frame_period_ms must be > 0, got %r" % frame_period_ms)
         if latency_ms is not None and latency_ms < 0:
@@ -136,12 +146,15 @@ class VisionCamera(object):
         self.latency_ms = int(DEFAULT_LATENCY_FRAMES * self.frame_period_ms if latency_ms is None else latency_ms)
         self.camera = CameraModel(width, height, mount_offset)
         self.effects = EFFECTS[effects]
-        self.world = world if world is not None else World.from_map(pmap)
+        if isinstance(appearance, dict):
+            appearance = AppearanceSpec.from_dict(appearance)
+        self.appearance = load_appearance(appearance)
+        self.world = world if world is not None else World.from_map(pmap, appearance=self.appearance)
         self._hidden_worlds = {}
         self._rng = np.random.default_rng([int(seed) & 0xFFFFFFFF, 0xCA3])  # sensor noise, per flight seed
         self.pixel_noise_px = float(pixel_noise_px)
         self._jitter_rng = np.random.default_rng([int(seed) & 0xFFFFFFFF, 0x71D])  # its own stream: 0 = no change
-        params = {"species": pmap.target_species}
+        params = {"species": pmap.target_species if model is None else str(model)}
         params.update(module_params or {})
         # the module's periodic timing log ("INF ForaNavTrees average ...") would interleave with the CLI output
         self.runner = ModuleRunner(serial_stream=serial_stream, params=params, log_stream=log_stream or _NullLog())
@@ -163,7 +176,9 @@ class VisionCamera(object):
         world = self._hidden_worlds.get(key)
         if world is None:
             bare = dataclasses.replace(self.pmap, trees=tuple(t for t in self.pmap.trees if t.id not in key))
-            world = self._hidden_worlds[key] = World.from_map(bare, seed=self.world.seed)
+            # the other trees keep the photo crowns they have in the full map
+            world = self._hidden_worlds[key] = World.from_map(bare, seed=self.world.seed, appearance=self.appearance,
+                                                              crown_trees=self.pmap.trees)
         # same effects seed for both renders so the pasted patch carries the same sensor noise statistics
         under = world.render(self.camera, pose, rng=np.random.default_rng(0), effects=self.effects).image
         rows, cols = np.mgrid[0:image.shape[0], 0:image.shape[1]]
@@ -218,6 +233,8 @@ class VisionCamera(object):
         """Detection totals of the flight so far (for the summary's "vision" entry)."""
         report = self.score.report()
         report.update(fps=round(1000.0 / self.frame_period_ms, 2), latency_ms=self.latency_ms)
+        if self.world.photo_crowns:  # only then: a default flight's summary keeps its bytes
+            report["photo_species"] = list(self.world.photo_species)
         return report
 
 
@@ -227,6 +244,15 @@ def fly_with_vision(pmap, *, seed=0, out_dir=None, options=None, progress=None, 
 
     camera = VisionCamera(pmap, seed=seed, **camera_kwargs)
     return run_flight(pmap, camera, seed=seed, out_dir=out_dir, options=options, progress=progress)
+
+
+def model_option(path):
+    """--model M: the absolute path of a model file the module can load; ForaNavError naming it otherwise."""
+    try:
+        foranav_model.load_model(str(path))
+    except foranav_model.ModelFormatError as err:
+        raise ForaNavError("--model %s" % err)
+    return str(Path(path).resolve())
 
 
 def _sim(pmap, seed=0, **kwargs):

@@ -4,7 +4,8 @@
 - ``world``: World.from_map(pmap) renders the orthomosaic once; world.render(camera, pose) -> Frame with the
   ground truth of the trees (TreeInView) and objects (ObjectInView) in view; per-frame Effects.
 - renderers: ``palms`` (oil palm, coconut, date palm), ``broadleaf`` (citrus, olive), ``objects`` (roof,
-  road crossing), ``ground``; drawing and compositing in ``sprite``.
+  road crossing), ``ground``; drawing and compositing in ``sprite``; ``crowns``: photo crowns from annotated
+  aerial photos and a ground photo (``--crowns`` / ``--ground``, parsed once in ``cli_args``).
 - ``clip``: the clip format (MJPG AVI + JSON sidecar), write_clip / read_clip; ``path``: flying the path F.
 - ``dataset``: the crops and annotated frames of ``foranav synth``.
 - ``specimens``, ``featurecheck``, ``gallery``: single-specimen crops, the feature-separation measurement and the

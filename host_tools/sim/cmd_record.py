@@ -9,7 +9,8 @@ import numpy as np
 from host_tools import argtypes, fileio
 from host_tools.errors import ForaNavError
 from host_tools.maps import load_map, map_to_dict
-from host_tools.sim.cli_args import ALTITUDE_M, EFFECT_PRESETS, add_camera_arguments, camera_from_args
+from host_tools.sim.cli_args import (ALTITUDE_M, EFFECT_PRESETS, add_appearance_arguments, add_camera_arguments,
+                                     appearance_from_args, camera_from_args, photo_summary)
 from host_tools.sim.clip import DEFAULT_QUALITY, write_clip
 from host_tools.sim.path import path_length, poses_along_path
 from host_tools.sim.world import World
@@ -34,6 +35,7 @@ def add_arguments(parser):
     parser.add_argument("--quality", type=argtypes.int_range(1, 100), default=DEFAULT_QUALITY,
                         help="MJPG quality 1-100 (default 75)")
     add_camera_arguments(parser)
+    add_appearance_arguments(parser)
 
 
 def run(args):
@@ -50,7 +52,8 @@ def run(args):
     if seconds * args.fps > MAX_FRAMES:
         raise ForaNavError("--fps/--speed/--duration: %.0f frames, more than %d (a slower --fps, a faster --speed "
                            "or a --duration)" % (seconds * args.fps, MAX_FRAMES))
-    world = World.from_map(pmap, seed=args.seed)
+    spec, appearance = appearance_from_args(args, {t.species for t in pmap.trees}, "map %s" % args.map)
+    world = World.from_map(pmap, seed=args.seed, appearance=appearance)
     timed = poses_along_path(pmap.waypoints, args.speed, args.fps, z, args.yaw, args.duration, args.start)
     effects = EFFECT_PRESETS[args.effects]
     rng = np.random.default_rng(world.seed)
@@ -58,6 +61,9 @@ def run(args):
     source = {"command": "record", "map": args.map, "seed": world.seed, "speed_m_s": args.speed,
               "z_m": z, "yaw_deg": args.yaw, "start_m": args.start, "duration_s": args.duration,
               "quality": args.quality, "effects": args.effects}
+    if not spec.default:  # only then: a default clip's sidecar keeps its bytes
+        source["appearance"] = spec.to_dict()
+        source["photo_species"] = list(world.photo_species)
     try:
         count = write_clip(args.out, frames, [t for t, _ in timed], camera, args.fps, map_to_dict(pmap), source,
                            args.quality)
@@ -65,4 +71,6 @@ def run(args):
         raise ForaNavError("%s: cannot write the clip: %s" % (args.out, err.strerror or err))
     print("wrote %s: %d frames, %.1f s at %.2f m/s, %dx%d" % (args.out, count, timed[-1][0], args.speed,
                                                               camera.width, camera.height))
+    if photo_summary(world):
+        print(photo_summary(world))
     return 0

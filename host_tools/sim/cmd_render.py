@@ -10,7 +10,8 @@ from host_tools import argtypes, fileio
 from host_tools.errors import ForaNavError
 from host_tools.maps import load_map
 from host_tools.sim.camera import Pose
-from host_tools.sim.cli_args import ALTITUDE_M, EFFECT_PRESETS, add_camera_arguments, camera_from_args
+from host_tools.sim.cli_args import (ALTITUDE_M, EFFECT_PRESETS, add_appearance_arguments, add_camera_arguments,
+                                     appearance_from_args, camera_from_args, photo_summary)
 from host_tools.sim.world import World
 
 
@@ -22,6 +23,7 @@ def add_arguments(parser):
     parser.add_argument("--yaw", type=argtypes.finite, default=0.0, help="yaw, degrees counter-clockwise (default 0)")
     parser.add_argument("--seed", type=argtypes.seed, default=None, help="world seed (default: the map's seed)")
     add_camera_arguments(parser)
+    add_appearance_arguments(parser)
     parser.add_argument("--out", required=True, help="output PNG")
 
 
@@ -30,13 +32,16 @@ def run(args):
     pmap = load_map(args.map)
     camera = camera_from_args(args)
     z = args.z if args.z is not None else pmap.altitude_m
-    world = World.from_map(pmap, seed=args.seed)
+    spec, appearance = appearance_from_args(args, {t.species for t in pmap.trees}, "map %s" % args.map)
+    world = World.from_map(pmap, seed=args.seed, appearance=appearance)
     frame = world.render(camera, Pose(args.x, args.y, z, args.yaw), effects=EFFECT_PRESETS[args.effects])
     write_png(args.out, frame.image)
     for t in frame.trees:
         print("tree %d %s target=%s u=%.1f v=%.1f w=%.1f h=%.1f %s"
               % (t.id, t.species, str(t.target).lower(), t.u, t.v, t.w, t.h,
                  "complete" if t.complete else "partial"))
+    if photo_summary(world):
+        print(photo_summary(world))
     return 0
 
 

@@ -12,6 +12,8 @@ Layout of DIR:
                          listed with an empty label
 Same seed, same bytes. --species selects the target species (default oil_palm); several, given together or
 repeated (--species oil_palm --species olive = --species oil_palm olive), make all of them targets.
+--crowns CSV ... draws the trees of the species in those annotation CSVs from their photographs (the crown
+library, docs/simulator.md), scaled to the flight camera: crops and frames of real crowns at flight scale.
 """
 import csv
 import io
@@ -25,6 +27,7 @@ from host_tools import argtypes, fileio
 from host_tools.annotations import Box, format_boxes
 from host_tools.errors import ForaNavError
 from host_tools.maps import SPECIES
+from host_tools.sim.cli_args import add_appearance_arguments, appearance_from_args
 from host_tools.sim.dataset import generate
 
 CROPS_HEADER = ("image", "class", "category")
@@ -41,13 +44,15 @@ def add_arguments(parser):
     parser.add_argument("--seed", type=argtypes.seed, default=0, help="seed (default 0)")
     parser.add_argument("--species", nargs="+", action="extend", choices=SPECIES, default=None,
                         help="target species, repeatable (default oil_palm)")
+    add_appearance_arguments(parser)
 
 
 def run(args):
     fileio.check_output_dir(args.out)
     frame_count = args.count if args.frames is None else args.frames
     species = tuple(dict.fromkeys(args.species or DEFAULT_SPECIES))
-    positives, negatives, frames = generate(args.seed, args.count, frame_count, species)
+    _, appearance = appearance_from_args(args, SPECIES, "the synth scenes")
+    positives, negatives, frames = generate(args.seed, args.count, frame_count, species, appearance=appearance)
     try:
         write_into(Path(args.out), positives, negatives, frames)
     except OSError as err:
@@ -55,6 +60,9 @@ def run(args):
     print("wrote %s: %d positive and %d negative crops (target %s), %d frames with %d boxes"
           % (args.out, len(positives), len(negatives), ", ".join(species), len(frames),
              sum(len(f.boxes) for f in frames)))
+    if appearance is not None and appearance.library is not None:
+        print("crowns from photos: %s" % ", ".join("%s (%d crowns)" % (s, appearance.library.count(s))
+                                                   for s in appearance.library.species))
     return 0
 
 

@@ -74,9 +74,9 @@ def random_scene(rng, target_species, name="synth"):
                          target_species[0])
 
 
-def scene_frames(rng, scene, camera, count):
+def scene_frames(rng, scene, camera, count, appearance=None):
     """Render count frames of a scene at random poses: [(image, trees_in_view, objects_in_view)]."""
-    world = World.from_map(scene, margin_m=0.5)
+    world = World.from_map(scene, margin_m=0.5, appearance=appearance)
     out = []
     for _ in range(count):
         pose = Pose(float(rng.uniform(-0.9, 0.9)), float(rng.uniform(-0.7, 0.7)),
@@ -160,10 +160,10 @@ def negative_group(category):
     return "lookalike"
 
 
-def generate(seed, count, frame_count, target_species=("oil_palm",), camera=None):
+def generate(seed, count, frame_count, target_species=("oil_palm",), camera=None, appearance=None):
     """(positives, negatives, frames): count crops of each class and frame_count annotated frames.
 
-    Deterministic for a seed. Negatives follow NEGATIVE_QUOTAS, topped up from any category when one runs short.
+    Deterministic for a seed. ``appearance`` (crowns.Appearance): photo crowns / ground photo for the scenes. Negatives follow NEGATIVE_QUOTAS, topped up from any category when one runs short.
     """
     camera = camera or CameraModel()
     rng = np.random.default_rng([seed & 0xFFFFFFFF, 2024])
@@ -176,7 +176,7 @@ def generate(seed, count, frame_count, target_species=("oil_palm",), camera=None
                 all(len(pools[k]) >= quotas[k] for k in quotas):
             break
         scene = random_scene(rng, tuple(target_species))
-        for image, trees, objects in scene_frames(rng, scene, camera, FRAMES_PER_SCENE):
+        for image, trees, objects in scene_frames(rng, scene, camera, FRAMES_PER_SCENE, appearance):
             if len(frames) < frame_count:
                 frames.append(AnnotatedFrame(image, frame_boxes(trees, objects)))
             for crop in crop_candidates(rng, image, trees, objects, target_species, frame_index):

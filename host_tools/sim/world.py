@@ -15,7 +15,8 @@ from typing import NamedTuple
 import cv2
 import numpy as np
 
-from host_tools.sim import broadleaf, ground, objects, palms
+from host_tools.sim import broadleaf, crowns, ground, objects, palms
+from host_tools.maps import SPECIES
 from host_tools.sim.camera import METRES_PER_PIXEL_PER_METRE_AT_352
 from host_tools.sim.sprite import composite, darken
 
@@ -132,7 +133,7 @@ class Lighting:
 class World:
     """An orthomosaic of one map with the ground truth needed to annotate frames."""
 
-    def __init__(self, pmap, levels, bounds, metres_per_pixel, seed, lighting, object_corners):
+    def __init__(self, pmap, levels, bounds, metres_per_pixel, seed, lighting, object_corners, photo_crowns=None):
         self.map = pmap
         self.levels = levels  # [uint8 HxWx3], finest first, each half the previous
         self.bounds = bounds  # (x_min, x_max, y_min, y_max) metres
@@ -142,16 +143,26 @@ class World:
         self._tree_xy = np.array([(t.x, t.y) for t in pmap.trees], float).reshape(-1, 2)
         self._tree_crown = np.array([t.crown_m for t in pmap.trees], float)
         self._object_corners = object_corners  # [(4, 2) world corners] per object
+        self.photo_crowns = dict(photo_crowns or {})  # tree id -> "file.csv:line" of the photo crown drawn
+
+    @property
+    def photo_species(self):
+        """The species of this map drawn from photographs (the others are drawn by the renderers)."""
+        ids = set(self.photo_crowns)
+        return tuple(s for s in SPECIES if any(t.species == s and t.id in ids for t in self.map.trees))
 
     # ---- building ------------------------------------------------------------------------------------
 
     @classmethod
-    def from_map(cls, pmap, seed=None, metres_per_pixel=None, margin_m=None):
+    def from_map(cls, pmap, seed=None, metres_per_pixel=None, margin_m=None, appearance=None, crown_trees=None):
         """Render the map's orthomosaic once. ``seed`` overrides the map's seed (ground and tree variation).
 
         ``metres_per_pixel`` sets the finest level (default: half a 352x288 pixel at the map altitude; use a
         finer one for 1280x1024 frames); ``margin_m`` the ground shown around the map's content (default: a
-        camera footprint at the map altitude; beyond it the ground is mirrored).
+        camera footprint at the map altitude; beyond it the ground is mirrored). ``appearance``
+        (crowns.Appearance, optional): photo crowns for the species of its library and a ground photo;
+        ``crown_trees`` the trees the crowns are dealt to (default the map's; a map with a tree removed passes
+        the full map's, so every other tree keeps its crown).
         """
         seed = pmap.seed if seed is None else int(seed)
         mpp = metres_per_pixel or METRES_PER_PIXEL_PER_METRE_AT_352 * pmap.altitude_m / SUPERSAMPLING
@@ -164,9 +175,19 @@ class World:
         rng = np.random.default_rng([seed & 0xFFFFFFFF, 0])
         lighting = Lighting.random(rng)
         image = ground.render_ground(rng, height, width, mpp, lighting.light)
-        corners = _draw_map(image, pmap, seed, mpp, bounds, lighting)
+        if appearance is not None and appearance.ground_photo is not None:
+            # the procedural ground is still drawn (same rng draws) so that a photo ground changes nothing else
+            image = crowns.ground_from_photo(appearance.ground_photo, appearance.spec.ground_gsd_m, height, width,
+                                             mpp, lighting.light)
+        library = appearance.library if appearance is not None else None
+        photos = crowns.assign(library, crown_trees or pmap.trees, seed) if library is not None else {}
+        drawn_ids = {t.id for t in pmap.trees}
+        photos = {i: p for i, p in photos.items() if i in drawn_ids}
+        shadows = appearance.spec.crown_shadows if appearance is not None else False
+        corners = _draw_map(image, pmap, seed, mpp, bounds, lighting, photos, shadows)
         levels = _pyramid(np.clip(image + 0.5, 0, 255).astype(np.uint8))
-        return cls(pmap, levels, bounds, mpp, seed, lighting, corners)
+        return cls(pmap, levels, bounds, mpp, seed, lighting, corners,
+                   {tree_id: crown.source for tree_id, (crown, _) in photos.items()})
 
     # ---- camera frames -------------------------------------------------------------------------------
 
@@ -234,8 +255,13 @@ class World:
         return (self.bounds[3] - y) / mpp, (self.bounds[1] - x) / mpp
 
 
-def _draw_map(image, pmap, seed, mpp, bounds, lighting):
-    """Draw the map's objects and crowns (and their shadows) onto the ground; returns object footprints."""
+def _draw_map(image, pmap, seed, mpp, bounds, lighting, photos=None, photo_shadows=False):
+    """Draw the map's objects and crowns (and their shadows) onto the ground; returns object footprints.
+
+    ``photos``: {tree id: (Crown, angle)} trees drawn from photographs, casting a shadow only with
+    ``photo_shadows`` (the photo has its own shading).
+    """
+    photos = photos or {}
     x_max, y_max = bounds[1], bounds[3]
 
     def to_px(x, y):  # world -> continuous mosaic pixel (col, row)
@@ -248,7 +274,14 @@ def _draw_map(image, pmap, seed, mpp, bounds, lighting):
         sprites.append((sprite, 0.25 * obj.size_m if obj.kind == "roof" else 0.0))
         corners.append(footprint)
     for index, tree in enumerate(pmap.trees):
-        sprites.append((_render_tree(tree, index, seed, mpp, to_px, lighting), TREE_HEIGHT_PER_CROWN * tree.crown_m))
+        height_m = TREE_HEIGHT_PER_CROWN * tree.crown_m
+        if tree.id in photos:
+            crown, angle = photos[tree.id]
+            col, row = to_px(tree.x, tree.y)
+            sprite = crowns.crown_sprite(crown, col, row, tree.crown_m / mpp, angle, lighting.light)
+            sprites.append((sprite, height_m if photo_shadows else 0.0))
+        else:
+            sprites.append((_render_tree(tree, index, seed, mpp, to_px, lighting), height_m))
     for sprite, height_m in sprites:  # shadows first: they fall on the ground, not on the canopies
         if height_m > 0:
             _cast_shadow(image, sprite, height_m / mpp, lighting)
