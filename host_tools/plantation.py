@@ -226,7 +226,10 @@ def _place_beside(rng, ranges, d, layout, waypoints, kind, count):
             if kind == "off_column":
                 crown = _draw(rng, ranges.crown_m)
                 low = max(_rule_m(crown)) + AMBIGUITY_MARGIN_M
-                ok = low <= distance <= low + OFF_COLUMN_BAND_M and layout.free(x, y, crown / 2.0)
+                # judged as written (the map rounds to mm), so rounding cannot bring it inside the margin
+                written = distance_to_path(round(x, 3), round(y, 3), waypoints)
+                ok = (low <= distance <= low + OFF_COLUMN_BAND_M and max(_rule_m(round(crown, 3)))
+                      + AMBIGUITY_MARGIN_M <= written and layout.free(x, y, crown / 2.0))
                 item = (x, y, "oil_palm", crown)
             elif kind == "lookalike":
                 crown = _draw(rng, ranges.crown_m)

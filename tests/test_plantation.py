@@ -86,3 +86,13 @@ def test_that_a_range_that_would_make_the_rule_ambiguous_fails_in_one_line(tmp_p
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 2 and "--lateral-jitter-m" in err[0] and "--column-spacing-m" in err[1]
     assert not path.exists()
+
+
+def test_that_rounding_the_written_map_never_brings_an_off_column_palm_inside_the_margin():
+    # seed 630509346 drew an off-column palm 0.6975 m from the path that the map's mm rounding put at 0.697
+    pmap, factors = generate(630509346)
+    assert factors["off_column_palms"] == 2
+    for tree in pmap.trees:
+        if tree.species == "oil_palm" and not tree.target:
+            rules = (COLUMN_RULE_FACTOR * tree.crown_m, COLUMN_RULE_FACTOR * APP_CROWN_M)
+            assert distance_to_path(tree.x, tree.y, pmap.waypoints) >= max(rules) + AMBIGUITY_MARGIN_M
