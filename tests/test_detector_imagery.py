@@ -70,9 +70,9 @@ def write_imagery(folder, seeds, imagery_b):
 def test_that_train_with_data_listed_once_or_repeated_writes_the_same_model_bytes(tmp_path):
     csv_a = write_imagery(tmp_path / "site_a", range(10, 18), False)
     csv_b = write_imagery(tmp_path / "site_b", range(20, 24), True)
-    common = ["train", "--species", "oil_palm", "--seed", "2", "--quiet", "--report", "none"]
-    assert main(common + ["--data", csv_a, csv_b, "--out", str(tmp_path / "listed.npz")]) == 0
-    assert main(common + ["--data", csv_a, "--data", csv_b, "--out", str(tmp_path / "repeated.npz")]) == 0
+    train_args = ["train", "--species", "oil_palm", "--seed", "2", "--quiet", "--report", "none"]
+    assert main(train_args + ["--data", csv_a, csv_b, "--out", str(tmp_path / "listed.npz")]) == 0
+    assert main(train_args + ["--data", csv_a, "--data", csv_b, "--out", str(tmp_path / "repeated.npz")]) == 0
     listed = (tmp_path / "listed.npz").read_bytes()
     assert listed == (tmp_path / "repeated.npz").read_bytes()
     model = common.load(str(tmp_path / "listed.npz"))
