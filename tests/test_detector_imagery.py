@@ -86,9 +86,12 @@ def test_that_evaluate_with_repeated_data_scores_every_csv(tmp_path, capsys):
     path = tmp_path / "m.npz"
     import foranav_model
     foranav_model.save_model(model, str(path))
-    assert main(["evaluate", "--model", str(path), "--data", csv_a, "--data", csv_b, "--crops", "5", "--json"]) == 0
+    plot = tmp_path / "pr.png"
+    assert main(["evaluate", "--model", str(path), "--data", csv_a, "--data", csv_b, "--crops", "5", "--json",
+                 "--plot", str(plot)]) == 0
     import json
     result = json.loads(capsys.readouterr().out)
+    assert plot.stat().st_size > 0
     assert sorted(result["imageries"]) == sorted([csv_a, csv_b])
     assert result["frames"]["n_frames"] == 5
     assert set(result["imageries"][csv_a]["funnel"]) == set(evaluation.FUNNEL_STAGES)
