@@ -89,6 +89,8 @@ def test_that_training_is_reproducible_from_its_seed_and_evaluation_reports_the_
                      "--quiet"]) == 0
     assert outputs[0].read_bytes() == outputs[1].read_bytes()
     assert foranav_model.load_model(str(outputs[0])).seed == 5
+    report = (tmp_path / "a_report" / "report.md").read_text()  # next to the model, per imagery and cue
+    assert "| train | oil_palm (target) |" in report and (tmp_path / "a_report" / "cues.png").stat().st_size > 0
     capsys.readouterr()
     assert main(["evaluate", "--model", str(outputs[0]), "--data", str(test_csv), "--crops", "15", "--json"]) == 0
     result = json.loads(capsys.readouterr().out)

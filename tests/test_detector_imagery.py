@@ -70,9 +70,9 @@ def write_imagery(folder, seeds, imagery_b):
 def test_that_train_with_data_listed_once_or_repeated_writes_the_same_model_bytes(tmp_path):
     csv_a = write_imagery(tmp_path / "site_a", range(10, 18), False)
     csv_b = write_imagery(tmp_path / "site_b", range(20, 24), True)
-    common = ["train", "--species", "oil_palm", "--seed", "2", "--quiet", "--report", "none"]
-    assert main(common + ["--data", csv_a, csv_b, "--out", str(tmp_path / "listed.npz")]) == 0
-    assert main(common + ["--data", csv_a, "--data", csv_b, "--out", str(tmp_path / "repeated.npz")]) == 0
+    train_args = ["train", "--species", "oil_palm", "--seed", "2", "--quiet", "--report", "none"]
+    assert main(train_args + ["--data", csv_a, csv_b, "--out", str(tmp_path / "listed.npz")]) == 0
+    assert main(train_args + ["--data", csv_a, "--data", csv_b, "--out", str(tmp_path / "repeated.npz")]) == 0
     listed = (tmp_path / "listed.npz").read_bytes()
     assert listed == (tmp_path / "repeated.npz").read_bytes()
     model = common.load(str(tmp_path / "listed.npz"))
@@ -86,9 +86,12 @@ def test_that_evaluate_with_repeated_data_scores_every_csv(tmp_path, capsys):
     path = tmp_path / "m.npz"
     import foranav_model
     foranav_model.save_model(model, str(path))
-    assert main(["evaluate", "--model", str(path), "--data", csv_a, "--data", csv_b, "--crops", "5", "--json"]) == 0
+    plot = tmp_path / "pr.png"
+    assert main(["evaluate", "--model", str(path), "--data", csv_a, "--data", csv_b, "--crops", "5", "--json",
+                 "--plot", str(plot)]) == 0
     import json
     result = json.loads(capsys.readouterr().out)
+    assert plot.stat().st_size > 0
     assert sorted(result["imageries"]) == sorted([csv_a, csv_b])
     assert result["frames"]["n_frames"] == 5
     assert set(result["imageries"][csv_a]["funnel"]) == set(evaluation.FUNNEL_STAGES)

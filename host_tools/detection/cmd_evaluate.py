@@ -119,9 +119,9 @@ def run(args):
         error = "n/a" if f["centre_error_px_mean"] is None else "%.1f px (median %.1f)" % (
             f["centre_error_px_mean"], f["centre_error_px_median"])
         print("%s: %d frames, %d trees, %d detections: precision %.2f %%, recall %.2f %%, F1 %.2f %%, centre error %s; "
-              "false alarms per image %.2f (on look-alikes %d); domain %s"
+              "false alarms per image %.2f (on look-alikes %.2f); domain %s"
               % (path, f["n_frames"], f["n_trees"], f["n_detections"], 100 * f["precision"], 100 * f["recall"],
-                 100 * f["f1"], error, f["false_alarms_per_image"], f["n_lookalike_false_alarms"],
+                 100 * f["f1"], error, f["false_alarms_per_image"], f["lookalike_false_alarms_per_image"],
                  ", ".join("%s x%d" % item for item in f["domains"].items())))
         print("  funnel: %d crowns; %s" % (f["n_trees"], ", ".join("%s %d" % (stage, f["funnel"][stage])
                                                                     for stage in evaluation.FUNNEL_STAGES)))

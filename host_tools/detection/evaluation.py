@@ -283,6 +283,7 @@ def evaluate_frames(model, frames, settings=None, hull=False, crown_px=None, fun
                 stages[name_] += counts[name_]
     result = _figures(n_hits, n_fp, n_miss, errors, len(frames))
     result.update(n_lookalike_false_alarms=n_lookalike, false_alarms_per_image=n_fp / float(max(1, len(frames))),
+                  lookalike_false_alarms_per_image=n_lookalike / float(max(1, len(frames))),
                   scored=scored, domains=domains_used)
     if funnel:
         result["funnel"] = stages
