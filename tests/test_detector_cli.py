@@ -50,7 +50,7 @@ def test_that_an_unreadable_image_is_one_error_line(tmp_path, capsys):
     bad = tmp_path / "bad.png"
     bad.write_bytes(b"not a png")
     assert main(["detect", str(bad), "--json"]) == 2
-    assert "cannot read image" in one_error_line(capsys)
+    assert "bad.png: not an image" in one_error_line(capsys)
     assert capsys.readouterr().out == ""
 
 
