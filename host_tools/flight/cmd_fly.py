@@ -19,6 +19,7 @@ Examples:
   foranav fly --map map1 --realtime --speed 4
   foranav fly --map map1 --silence 40:2 --garbage-rate 0.2
   foranav fly --map map1 --camera oracle
+  foranav fly --map map1 --app c
   foranav fly --map map2 --camera oracle --dropout 0.3 --json
   foranav fly --map map3 --camera oracle --hide-tree 6 --hide-s 5 --mavlink udpout:127.0.0.1:14550
 """
@@ -30,6 +31,7 @@ from pathlib import Path
 from host_tools.errors import ForaNavError
 
 CAMERA_CHOICES = ("oracle", "sim")
+APP_CHOICES = ("python", "c")
 PROGRESS_EVERY_S = 5.0  # wall-clock seconds between progress lines on stderr
 
 
@@ -67,6 +69,8 @@ def add_arguments(parser):
                         help="state estimate model: uwb (absolute, biased) or flow (drifting)")
     parser.add_argument("--wind", type=float, default=0.0, help="wind gust acceleration std (m/s^2)")
     parser.add_argument("--mavlink", help="also stream the telemetry live, e.g. udpout:127.0.0.1:14550")
+    parser.add_argument("--app", choices=APP_CHOICES, default="python",
+                        help="flight app: python (default) or c (the C core of crazyflie_app/bolt, as on the Bolt)")
 
 
 def _options(args):
@@ -81,7 +85,7 @@ def _options(args):
             raise ForaNavError("--%s: must be in [0, 1], got %r" % (name.replace("_", "-"), getattr(args, name)))
     options = {"dropout": args.dropout, "model": {"estimator": args.estimator, "wind_gust_mps2": args.wind},
                "silence": [_window(text) for text in args.silence], "garbage_rate": args.garbage_rate,
-               "partial_rate": args.partial_rate}
+               "partial_rate": args.partial_rate, "app": args.app}
     if args.hide_tree is not None:
         options.update(hide_tree=args.hide_tree, hide_s=args.hide_s)
     if args.mavlink:

@@ -11,6 +11,7 @@ Examples:
   foranav paper-tests
   foranav paper-tests --out runs/paper --json
   foranav paper-tests --tests 3,6 --jobs 1
+  foranav paper-tests --app c
 """
 import json
 import sys
@@ -26,6 +27,8 @@ def add_arguments(parser):
                         '"test" and "map") instead of the table')
     parser.add_argument("--tests", help="comma-separated test numbers to run (default: 1-9)")
     parser.add_argument("--jobs", type=int, default=None, help="flights in parallel (default: one per CPU)")
+    parser.add_argument("--app", choices=("python", "c"), default="python",
+                        help="flight app: python (default) or c (the C core of crazyflie_app/bolt)")
 
 
 def _selected(text):
@@ -56,7 +59,7 @@ def run(args):
             print("  Test %d (%s): %s in %.0f s" % (entry["test"], entry["map"], "pass" if entry["passed"]
                                                    else "FAIL", entry["wall_s"]), file=sys.stderr)
 
-    results = paper_tests.run_tests(tests, out_dir=args.out, jobs=args.jobs, on_result=on_result)
+    results = paper_tests.run_tests(tests, out_dir=args.out, jobs=args.jobs, on_result=on_result, app=args.app)
     wall = round(time.monotonic() - started, 1)
     paths = paper_tests.write_outputs(results, Path(args.out), wall_s=wall)
     if args.json:

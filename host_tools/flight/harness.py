@@ -30,6 +30,8 @@ before the clock moves on, so the same map and seed give the same summary and th
     params         dict of app parameters to set before flight, by 'group.name' ('app.settleRadius': 5)
     start          (x, y) take-off point (default: the first waypoint)
     mavlink        live MAVLink output URL (e.g. 'udpout:127.0.0.1:14550'); needs out_dir (it tees the tlog)
+    app            the flight app: 'python' (crazyflie_app/navigation.py, default) or 'c' (the C core of
+                   crazyflie_app/bolt, crazyflie_app/c_app.py); both read the camera through the emulated UART2
     decks          decks present (default ('bcFlow2', 'bcLoco'))
 
 ``progress(t_s, phase_name)`` is called every simulated second.
@@ -54,7 +56,7 @@ from host_tools.flight.wire import PtyWire
 DEFAULT_OPTIONS = {
     "dropout": 0.0, "hide_tree": None, "hide_s": 5.0, "hide_at_s": None, "silence": (), "garbage_rate": 0.0,
     "partial_rate": 0.0, "lockstep": True, "max_time_s": 900.0, "model": None, "params": None, "start": None,
-    "mavlink": None, "decks": ("bcFlow2", "bcLoco"),
+    "mavlink": None, "decks": ("bcFlow2", "bcLoco"), "app": "python",
 }
 WORLD_TASK_PRI = 6  # above the stabilizer: bytes land on the wire before the firmware looks at the tick
 MONITOR_TASK_PRI = 0  # below the app: samples what the app did on this tick
@@ -97,6 +99,20 @@ def camera_factory(name):
     return _CAMERAS[name]
 
 
+def _python_app(cf, path, target_label):
+    from crazyflie_app.uart2_link import Uart2Link
+    return NavigationApp(cf, path, None, link=Uart2Link(cf), target_label=target_label)
+
+
+def _c_app(cf, path, target_label):
+    from crazyflie_app.c_app import CNavigationApp
+    return CNavigationApp(cf, path, target_label=target_label)
+
+
+# the app seam: factory(cf with UART2 attached, waypoints, target species) -> the app
+APPS = {"python": _python_app, "c": _c_app}
+
+
 def _options(options):
     merged = dict(DEFAULT_OPTIONS)
     for key, value in (options or {}).items():
@@ -106,6 +122,8 @@ def _options(options):
     for key in ("dropout", "garbage_rate", "partial_rate"):
         if not 0.0 <= float(merged[key]) <= 1.0:
             raise ForaNavError("flight option %s: must be a probability in [0, 1], got %r" % (key, merged[key]))
+    if merged["app"] not in APPS:
+        raise ForaNavError("flight option app: %r unknown (have %s)" % (merged["app"], ", ".join(sorted(APPS))))
     if float(merged["hide_s"]) < 0 or float(merged["max_time_s"]) <= 0:
         raise ForaNavError("flight options hide_s / max_time_s must be positive")
     return merged
@@ -126,7 +144,8 @@ class _Flight(object):
         self.cf = Crazyflie(seed=seed, model_config=model, decks=tuple(options["decks"]),
                             start=(float(start[0]), float(start[1]), 0.0))
         self.wire = PtyWire(lockstep=bool(options["lockstep"]))
-        self.app = NavigationApp(self.cf, pmap.waypoints, self.wire.slave_path, target_label=pmap.target_species)
+        self.cf.attach_uart2(self.wire.slave_path)  # the camera's wire on the deck port
+        self.app = APPS[options["app"]](self.cf, pmap.waypoints, pmap.target_species)
         registry = self.cf.registry
         registry.param_set("app.altitude", pmap.altitude_m)
         registry.param_set("app.camLatency", camera.latency_ms)

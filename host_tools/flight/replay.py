@@ -134,7 +134,7 @@ class _ClipCamera(object):
         self.runner = ModuleRunner(params=params, log_stream=_NullLog())
 
 
-def replay_clip(clip, pmap=None, *, latency_ms=None, seed=0, params=None):
+def replay_clip(clip, pmap=None, *, latency_ms=None, seed=0, params=None, app="python"):
     """Play ``clip`` (host_tools.sim.clip.Clip) through the module and the app -> the report dict."""
     if pmap is None:
         if clip.map is None:
@@ -147,7 +147,7 @@ def replay_clip(clip, pmap=None, *, latency_ms=None, seed=0, params=None):
         raise ForaNavError("--latency-ms: must not be negative")
     first = clip.frames[0].pose
     last_s = clip.frames[-1].t_s
-    options = {"start": (first.x, first.y), "max_time_s": last_s + 60.0, "params": params}
+    options = {"start": (first.x, first.y), "max_time_s": last_s + 60.0, "params": params, "app": app}
     camera = _ClipCamera(clip, pmap, latency_ms)
     flight = _ReplayFlight(pmap, clip, camera, seed, harness._options(options))
     flight.app.params.altitude_m = first.z  # the app flies at the recorded height
