@@ -192,3 +192,14 @@ def test_that_foranav_fly_takes_the_c_app(tmp_path):
     summary = json.loads(result.stdout)
     assert summary["success"] and summary["mean_deviation_m"] <= MAX_MEAN_DEVIATION_M
     assert not math.isnan(summary["mean_deviation_m"])
+
+
+@pytest.mark.slow
+def test_that_a_replay_with_the_c_app_reports_what_the_python_app_does():
+    from host_tools.flight.replay import expectation_record, replay_clip
+    from host_tools.sim.clip import read_clip
+
+    clip = read_clip(REPO / "tests" / "fixtures" / "clips" / "map3_short_sensor")
+    python, c = replay_clip(clip), replay_clip(clip, app="c")
+    assert expectation_record(c) == expectation_record(python)
+    assert c["setpoints"] == python["setpoints"] and c["tree_map"] == python["tree_map"]
