@@ -77,3 +77,14 @@ def test_that_the_core_compiles_for_the_bolt_under_werror_and_imports_nothing_un
     libgcc = {name for name in imports if name.startswith("__aeabi_")}  # soft double, division: libgcc
     assert imports - internal - libgcc <= ARM_ALLOWED_IMPORTS, sorted(imports - internal - libgcc - ARM_ALLOWED_IMPORTS)
     assert not imports & {"malloc", "free", "snprintf", "printf", "strtod", "sprintf"}
+
+
+def test_that_the_committed_bolt_path_is_map1s_and_a_bad_map_is_refused(tmp_path, capsys):
+    from host_tools import bolt_path
+
+    assert (c_core.SOURCE_DIR / "foranav_path.h").read_text() == bolt_path.path_header("map1")
+    assert "#define FORANAV_PATH_WAYPOINTS 4" in bolt_path.path_header("map1")
+    bad = tmp_path / "bad.json"
+    bad.write_text('{"name": "x", "altitude_m": 1.0, "waypoints": [[0, 0]], "trees": []}')
+    assert bolt_path.main([str(bad)]) == 2
+    assert "waypoints" in capsys.readouterr().err

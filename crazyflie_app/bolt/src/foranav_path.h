@@ -1,4 +1,4 @@
-/* The path F of the ForaNav Bolt app, from map map1 (python -m crazyflie_app.bolt_path map1). */
+/* The path F of the ForaNav Bolt app, from map map1 (python -m host_tools.bolt_path map1). */
 #ifndef FORANAV_PATH_H
 #define FORANAV_PATH_H
 
