@@ -12,6 +12,7 @@
  * PARAM_GROUP(app) and LOG_GROUP(app) have the names, types and units of the Python app's tables
  * (tests/test_capp_build.py checks it); the console lines are the Python app's (navFormatEvent).
  */
+#include <math.h>
 #include <stdbool.h>
 #include <stdint.h>
 #include <string.h>
@@ -39,7 +40,7 @@
 #define APP_PERIOD_MS 10           /* the main loop */
 #define CAMERA_PERIOD_MS 10        /* UART2 polling: 200 bytes hold 17 ms of 115200 baud */
 #define CAMERA_TASK_PRI 1
-#define CAMERA_TASK_STACKSIZE 600 /* words */
+#define CAMERA_TASK_STACKSIZE 800 /* words: the frame path (association, events) needs ~2 kB */
 #define UART2_BAUDRATE 115200
 #define UART_CHUNK 64
 #define LOG_VARID_INVALID 0xffffu
@@ -252,8 +253,8 @@ static void refreshLog(void) {
   const NavTree* target = navCoreTarget(&core);
   appLog.phase = (uint8_t)core.phase;
   appLog.targetId = (uint16_t)core.target_id;
-  appLog.targetX = target != NULL ? (float)target->x : 0.0f;
-  appLog.targetY = target != NULL ? (float)target->y : 0.0f;
+  appLog.targetX = target != NULL ? (float)target->x : NAN; /* as the Python app: no target, no position */
+  appLog.targetY = target != NULL ? (float)target->y : NAN;
   appLog.errU = (float)core.pixel_error[0];
   appLog.errV = (float)core.pixel_error[1];
   appLog.captured = core.captured ? 1 : 0;
@@ -304,7 +305,10 @@ void appMain(void) {
   navParamsDefaults(&params);
   params.altitude_m = FORANAV_ALTITUDE_M;
   paramsFromCore(&params);
-  navCoreInit(&core, &params, pathXy, FORANAV_PATH_WAYPOINTS);
+  if (!navCoreInit(&core, &params, pathXy, FORANAV_PATH_WAYPOINTS)) {
+    DEBUG_PRINT("foranav_path.h: 2 to %d waypoints needed, aborting\n", NAV_MAX_WAYPOINTS);
+    return;
+  }
   navCameraInputInit(&camera, FORANAV_TARGET_LABEL);
   coreMutex = xSemaphoreCreateMutexStatic(&coreMutexBuffer);
   uart2Init(UART2_BAUDRATE);
