@@ -58,7 +58,8 @@ from crazyflie_app.firmware.freertos import m2t, v_task_delay, PORT_MAX_DELAY
 from crazyflie_app.firmware.logparam import (LOG_FLOAT, LOG_UINT8, LOG_UINT16, LOG_UINT32, LOG_VARID_INVALID,
                                               PARAM_FLOAT, PARAM_UINT8, PARAM_UINT16, PARAM_UINT32,
                                               PARAM_VARID_INVALID, log_add, log_group, param_add, param_group)
-from crazyflie_app.navigation_core import (PHASE_DONE, Detection, NavigationCore, NavigationParams, Pose)
+from crazyflie_app.navigation_core import (PHASE_DONE, PHASE_NO_CAMERA, Detection, NavigationCore,
+                                           NavigationParams, Pose)
 from crazyflie_app.serial_link import SerialLink
 
 DEBUG_MODULE = "FORANAV"
@@ -68,6 +69,7 @@ APP_PERIOD_MS = 10  # the C main loop: vTaskDelay(M2T(10))
 CAMERA_TASK_PERIOD_MS = 10  # serial polling period; reading never blocks
 BOOT_DELAY_MS = 2000  # Navigation.c: wait 2 s, then check the decks
 PRE_TAKEOFF_DELAY_MS = 3000  # Navigation.c: wait 3 s more before take-off
+CAMERA_WAIT_POLL_MS = 10  # pre-flight camera check: how often app_main looks whether the camera was heard
 
 
 def set_hover_setpoint(sp, vx, vy, z, yaw):
@@ -104,10 +106,12 @@ class NavigationApp(object):
         self.core = NavigationCore(self.params, flight_path)
         self.link = link or SerialLink(serial_url)
         self.setpoint = setpoint_t()  # static setpoint_t setpoint;
-        self._frame = []  # detections of the frame being received
+        self._frame = []  # detections of the frame being received (at most app.frameCap)
         self._marks_seen = False  # the camera sends MARK START/STOP: frames are delimited by them
         self.frames = 0
         self.last_detection_ms = -1
+        self.last_heard_ms = -1  # last valid camera message (frame mark or detection); -1: never heard
+        self.frame_overflow = 0  # detections dropped: more than app.frameCap in one frame
         cf.registry.register_param_group(PARAM_TABLE, self.params)
         cf.registry.register_log_group(LOG_TABLE, self)
 
@@ -144,6 +148,20 @@ class NavigationApp(object):
             return
         cf.debug_print(DEBUG_MODULE, "Armed")
         yield v_task_delay(m2t(PRE_TAKEOFF_DELAY_MS))
+        waited_ms = 0
+        while not self.camera_alive(cf.x_task_get_tick_count()):
+            if waited_ms >= self.params.camera_wait_ms:
+                # a camera never heard is a camera lost: flying the path blind would "complete" nothing
+                cf.debug_print(DEBUG_MODULE, "No camera heard for %.1f s, not taking off"
+                               % (self.params.camera_wait_ms / 1000.0))
+                self.core.abort_no_camera(cf.x_task_get_tick_count())
+                self._print_events()
+                yield v_task_delay(PORT_MAX_DELAY)
+                return
+            if waited_ms == 0:
+                cf.debug_print(DEBUG_MODULE, "Waiting for the camera")
+            yield v_task_delay(m2t(CAMERA_WAIT_POLL_MS))
+            waited_ms += CAMERA_WAIT_POLL_MS
         self.core.start(cf.x_task_get_tick_count())
         self._print_events()
         while True:
@@ -157,6 +175,12 @@ class NavigationApp(object):
             self._print_events()
             yield v_task_delay(m2t(APP_PERIOD_MS))
 
+    def camera_alive(self, now):
+        """Pre-flight check: a valid camera message within app.linkHoldMs (app.camWaitMs 0: no check)."""
+        if self.params.camera_wait_ms <= 0:
+            return True
+        return self.last_heard_ms >= 0 and now - self.last_heard_ms <= self.params.link_hold_ms
+
     def read_pose(self):
         cf, ids = self.cf, self._estimate_ids
         return Pose(*[cf.log_get_float(var_id) for var_id in ids])
@@ -168,7 +192,7 @@ class NavigationApp(object):
             else:
                 text = "%s tree %d" % (event.kind, event.tree_id) if event.tree_id else event.kind
                 if event.kind in ("tree_added", "tree_reached", "target_selected", "recovery", "abandoned",
-                                  "approach_by_memory"):
+                                  "approach_by_memory", "revisit"):
                     text += " at (%.3f, %.3f)" % (event.x, event.y)
                 if event.detail:
                     text += " " + event.detail
@@ -190,6 +214,8 @@ class NavigationApp(object):
         """One received line: T2/N2 detections are kept for the frame, MARK START/STOP delimit frames, and
         everything else (OK, ERR ..., ALIVE, noise) is ignored."""
         message = foranav_serial.parse_line(line)
+        if isinstance(message, (foranav_serial.FrameMark, foranav_serial.Target2D)):
+            self.last_heard_ms = self.cf.x_task_get_tick_count()
         if isinstance(message, foranav_serial.FrameMark):
             self._marks_seen = True
             self.core.on_frame_mark(self.cf.x_task_get_tick_count())
@@ -199,11 +225,15 @@ class NavigationApp(object):
                 self.other_labels += 1
                 return
             p = self.params
+            if len(self._frame) >= p.frame_capacity:
+                self.frame_overflow += 1  # T2 lines without MARK STOP must not pile up without limit
+                return
             self._frame.append(Detection(foranav_serial.std_to_img_x(message.x, p.cam_width_px),
                                          foranav_serial.std_to_img_y(message.y, p.cam_height_px)))
 
     def _end_frame(self):
-        if not self._frame or self.core.phase == PHASE_DONE or not hasattr(self, "_estimate_ids"):
+        if not self._frame or self.core.phase in (PHASE_DONE, PHASE_NO_CAMERA) \
+                or not hasattr(self, "_estimate_ids"):
             self._frame = []
             return
         now = self.cf.x_task_get_tick_count()
@@ -228,7 +258,10 @@ class NavigationApp(object):
     abandoned = property(lambda self: self.core.counters.abandoned)
     detections = property(lambda self: self.core.counters.detections)
     out_of_column = property(lambda self: self.core.counters.out_of_column)
+    pending_detections = property(lambda self: len(self._frame))  # of the frame being received
     evicted = property(lambda self: self.core.memory.evicted)
+    unstored = property(lambda self: self.core.memory.unstored)
+    duplicates = property(lambda self: self.core.counters.duplicates)
     forgotten = property(lambda self: self.core.memory.visited_forgotten)
     captured = property(lambda self: int(self.core.captured))
     err_u = property(lambda self: self.core.pixel_error[0])
@@ -293,11 +326,19 @@ PARAM_TABLE = param_group("app", [
     param_add(PARAM_UINT16, "linkHoldMs", "link_hold_ms", "ms",
               "camera link silent this long in flight: hold position until frames come back"),
     param_add(PARAM_UINT16, "linkLandMs", "link_land_ms", "ms", "camera link silent this long: land"),
+    param_add(PARAM_UINT16, "camWaitMs", "camera_wait_ms", "ms",
+              "before take-off: no camera line heard within linkHoldMs for this long -> NO_CAMERA, stay on the "
+              "ground (0: no check)"),
+    param_add(PARAM_UINT8, "frameCap", "frame_capacity", "",
+              "detections kept per frame; more before the frame's MARK STOP are dropped (LOG frameOverflow)"),
     param_add(PARAM_FLOAT, "recoverySpeed", "recovery_speed", "m/s", "speed when re-approaching s_t"),
     param_add(PARAM_FLOAT, "returnTol", "return_tolerance_m", "m",
               "cross-track error that ends RETURN_TO_PATH"),
     param_add(PARAM_FLOAT, "mergeRadius", "merge_radius_m", "m",
               "detections this close to a stored tree are the same tree (Navigation.c: 0.45 m)"),
+    param_add(PARAM_FLOAT, "dupRadius", "duplicate_radius_m", "m",
+              "detections of one frame this close are one crown seen twice and merged (trees stand >= a crown "
+              "apart)"),
     param_add(PARAM_FLOAT, "crownSize", "crown_size_m", "m", "crown size of a mature tree (planting column)"),
     param_add(PARAM_FLOAT, "columnFactor", "column_factor", "",
               "planting column half-width in crown sizes (paper: 1.5)"),
@@ -334,6 +375,9 @@ LOG_TABLE = log_group("app", [
     log_add(LOG_UINT32, "detections", "detections", "", "detections received"),
     log_add(LOG_UINT32, "outOfColumn", "out_of_column", "", "detections outside the planting column"),
     log_add(LOG_UINT16, "evicted", "evicted", "", "trees evicted from a full T_d"),
+    log_add(LOG_UINT16, "unstored", "unstored", "", "new trees not stored: T_d full of trees of the same frame"),
+    log_add(LOG_UINT32, "duplicates", "duplicates", "", "detections merged with another of the same frame"),
+    log_add(LOG_UINT32, "frameOverflow", "frame_overflow", "", "detections dropped beyond frameCap in a frame"),
     log_add(LOG_UINT16, "forgotten", "forgotten", "", "visited entries forgotten from a full list"),
     log_add(LOG_UINT32, "linkDropped", "link_dropped", "", "serial lines dropped for length"),
     log_add(LOG_UINT16, "linkOpens", "link_opens", "", "times the serial port was (re)opened"),

@@ -7,7 +7,8 @@ Phases (``custom_mode`` in the telemetry heartbeat)::
                           ^   |            |            | (timeout: tree abandoned)
                           |   v            v reached    v
                           RETURN_TO_PATH <------------- +
-    FOLLOW_PATH (last waypoint) -> LAND -> DONE (null setpoints, motors off);  NO_DECK: no Flow deck, aborted
+    FOLLOW_PATH (last waypoint) -> [RECOVERY -> APPROACH: go back once per tree abandoned unseen] -> LAND -> DONE
+    (null setpoints, motors off);  NO_DECK: no Flow deck, aborted;  NO_CAMERA: camera never heard, never took off
 
 * FOLLOW_PATH flies the path F (waypoints) at ``cruiseSpeed`` with a carrot ``lookahead`` ahead of the
   MAV's projection on the current segment, which also pulls it back onto the line. A waypoint is passed
@@ -36,6 +37,14 @@ Phases (``custom_mode`` in the telemetry heartbeat)::
   A camera that sends no frame marks cannot be told from one that sees nothing, so it is not watched.
 * After a tree, RETURN_TO_PATH flies back to the current segment until the cross-track error is below
   ``returnTolerance``.
+* Going back once: a tree abandoned because recovery timed out without seeing it again (it was hidden) is
+  flagged in the visited list. At the last waypoint, before landing, the app goes back to each flagged
+  tree in turn (nearest first): the entry is restored into T_d as the target and approached by memory
+  (RECOVERY, whose timeouts start only once the MAV is within ``returnTolerance`` of s_t), then visually.
+  Reached or abandoned again, it is never flagged again; when no flagged tree is left, LAND.
+* One frame, one detection per crown: detections of one frame closer than ``dupRadius`` on the ground are
+  merged first (``merge_duplicates``); without this, two detector windows on one big crown (1.0 m
+  altitude) became two stored trees and the tree was reached twice.
 """
 import math
 from collections import deque, namedtuple
@@ -45,9 +54,9 @@ from crazyflie_app.pixel_kalman import PixelKalmanFilter
 from crazyflie_app.tree_memory import TreeMemory
 
 PHASE_BOOT, PHASE_TAKEOFF, PHASE_FOLLOW_PATH, PHASE_APPROACH, PHASE_RECOVERY, PHASE_RETURN_TO_PATH, \
-    PHASE_LAND, PHASE_DONE, PHASE_NO_DECK = range(9)
+    PHASE_LAND, PHASE_DONE, PHASE_NO_DECK, PHASE_NO_CAMERA = range(10)
 PHASE_NAMES = ("BOOT", "TAKEOFF", "FOLLOW_PATH", "APPROACH", "RECOVERY", "RETURN_TO_PATH", "LAND", "DONE",
-               "NO_DECK")
+               "NO_DECK", "NO_CAMERA")
 
 POSE_HISTORY_LENGTH = 128  # ticks of pose history kept for latency compensation (~1.3 s at 100 Hz)
 
@@ -90,6 +99,11 @@ class NavigationParams:
     recovery_speed: float = 0.10
     return_tolerance_m: float = 0.05
     merge_radius_m: float = 0.45  # Navigation.c same-tree distance
+    # two detections of ONE frame this close are one crown seen twice (at 1.0 m a 0.38 m crown spans 120 px
+    # and the module reported two windows 0.15 m apart on it: the app stored two trees and reached one twice);
+    # distinct trees stand at least a crown (crownSize 0.35 m) apart, clusters 0.35-0.47 m. Duplicates seen
+    # 0.05-0.18 m apart; a cluster pair 0.47 m apart with 0.1 m edge errors on each still stays 0.27 m apart
+    duplicate_radius_m: float = 0.25
     crown_size_m: float = 0.35
     column_factor: float = 1.5  # paper: 1.5 x crown size
     min_hits: int = 2
@@ -105,6 +119,10 @@ class NavigationParams:
     kf_accel_psd: float = 400.0  # px^2/s^3
     link_hold_ms: int = 1000  # camera silent this long (9 frames at the paper's 9 fps): hold position
     link_land_ms: int = 10000  # ... this long: give up and land
+    # used by the firmware layer (navigation.py), kept here with every other PARAM:
+    camera_wait_ms: int = 20000  # before take-off: camera unheard this long -> NO_CAMERA, never take off
+    #                              (0: take off without waiting, e.g. a replayed clip that starts in flight)
+    frame_capacity: int = 64  # detections kept per frame; more before MARK STOP are dropped (counted)
 
     @property
     def focal_px(self):
@@ -131,6 +149,7 @@ class Counters:
     recoveries: int = 0
     abandoned: int = 0
     link_losses: int = 0
+    duplicates: int = 0  # detections merged into another one of the same frame (merge_duplicates)
 
 
 def rotate(yaw_deg, bx, by):
@@ -163,6 +182,28 @@ def servo_velocity(offset_fwd_m, offset_left_m, gain, max_speed, integral=(0.0, 
     return vx, vy
 
 
+def merge_duplicates(detections, points, radius_m):
+    """Detections of one frame closer than ``radius_m`` on the ground are one tree seen twice (overlapping
+    detector windows on one large crown): distinct trees stand at least a crown apart. Greedy, in line
+    order: each detection joins the first kept one within the radius (running mean of pixel and ground
+    position) or is kept. Returns ([(Detection, (x, y)), ...] kept, index into it for every detection)."""
+    kept, counts, owner = [], [], []
+    for det, (x, y) in zip(detections, points):
+        for k, (other, (ox, oy)) in enumerate(kept):
+            if math.hypot(x - ox, y - oy) < radius_m:
+                n = counts[k] + 1
+                kept[k] = (Detection(other.u + (det.u - other.u) / n, other.v + (det.v - other.v) / n),
+                           (ox + (x - ox) / n, oy + (y - oy) / n))
+                counts[k] = n
+                owner.append(k)
+                break
+        else:
+            kept.append((det, (x, y)))
+            counts.append(1)
+            owner.append(len(kept) - 1)
+    return kept, owner
+
+
 class NavigationCore(object):
     """Algorithm 1. Call ``on_frame`` with each camera frame's detections and ``step`` every control tick."""
 
@@ -192,6 +233,8 @@ class NavigationCore(object):
         self.last_frame_ms = None  # camera link watch: time of the last end-of-frame mark (None: not watched)
         self.link_lost = False
         self.link_aborted = False
+        self.revisiting = False  # flying back, before landing, to a tree abandoned while hidden
+        self._revisit_arrived = False  # ... and over its stored s_t once
 
     # -- geometry -----------------------------------------------------------------------------------------
 
@@ -236,36 +279,46 @@ class NavigationCore(object):
         """Handle the detections of one camera frame, received at ``t_ms`` (captured cam_latency_ms earlier).
 
         Returns, per detection, the id of the stored or visited tree it was associated with (0: ignored,
-        outside the planting column)."""
+        outside the planting column or no room in T_d)."""
         p = self.params
         pose_capture = self._pose_at(t_ms - p.cam_latency_ms) or pose_now
         points = [self.pixel_to_world(d.u, d.v, pose_capture) for d in detections]
         self.last_frame_points = points
-        assignment = self.memory.associate(points, p.merge_radius_m)
+        merged, owner = merge_duplicates(detections, points, p.duplicate_radius_m)
+        self.counters.duplicates += len(detections) - len(merged)
+        assignment = self.memory.associate([point for _, point in merged], p.merge_radius_m)
+        protected = {tree_id for kind, tree_id in assignment if kind == "tree"}
         mav_xy = (pose_now.x, pose_now.y)
-        ids = []
-        for det, (wx, wy), (kind, tree_id) in zip(detections, points, assignment):
-            self.counters.detections += 1
-            ids.append(tree_id or 0)
-            if kind == "visited":
-                self.counters.on_visited += 1
-                continue
-            if kind is None:
-                if not self.in_planting_column(wx, wy):
-                    self.counters.out_of_column += 1
-                    continue
-                tree_id, evicted = self.memory.add(wx, wy, t_ms, det.u, det.v, mav_xy)
-                ids[-1] = tree_id
-                self.events.append(Event("tree_added", t_ms, tree_id, wx, wy))
-                for gone in evicted:
-                    self.events.append(Event("tree_evicted", t_ms, gone, detail="T_d full"))
-                    if gone == self.target_id:
-                        self._drop_target()
-            else:
-                self.memory.update(tree_id, wx, wy, t_ms, det.u, det.v)
-            if tree_id == self.target_id:
-                self._measure_target(t_ms, det, pose_capture, pose_now)
-        return ids
+        merged_ids = []
+        for (det, (wx, wy)), (kind, tree_id) in zip(merged, assignment):
+            merged_ids.append(self._take_detection(t_ms, det, wx, wy, kind, tree_id, protected, mav_xy,
+                                                   pose_capture, pose_now))
+        self.counters.detections += len(detections)
+        return [merged_ids[k] for k in owner]
+
+    def _take_detection(self, t_ms, det, wx, wy, kind, tree_id, protected, mav_xy, pose_capture, pose_now):
+        """One (de-duplicated) detection of a frame -> the id of its tree (0: ignored)."""
+        if kind == "visited":
+            self.counters.on_visited += 1
+            return tree_id
+        if kind is None:
+            if not self.in_planting_column(wx, wy):
+                self.counters.out_of_column += 1
+                return 0
+            tree_id, evicted = self.memory.add(wx, wy, t_ms, det.u, det.v, mav_xy, protected)
+            for gone in evicted:
+                self.events.append(Event("tree_evicted", t_ms, gone, detail="T_d full"))
+                if gone == self.target_id:
+                    self._drop_target()
+            if not tree_id:
+                return 0  # T_d full of trees seen in this very frame: counted in memory.unstored
+            protected.add(tree_id)  # a later new tree of this frame must not evict this one
+            self.events.append(Event("tree_added", t_ms, tree_id, wx, wy))
+        else:
+            self.memory.update(tree_id, wx, wy, t_ms, det.u, det.v)
+        if tree_id == self.target_id:
+            self._measure_target(t_ms, det, pose_capture, pose_now)
+        return tree_id
 
     def _ego_corrected(self, det, pose_capture, pose_now):
         """The measured pixel moved to where the tree appears now, given the MAV's motion since capture."""
@@ -291,6 +344,10 @@ class NavigationCore(object):
         self._poses.append((t_ms, pose))
         self.memory.capacity = max(1, int(self.params.tree_capacity))  # PARAMs may change in flight
         self.memory.visited_capacity = max(1, int(self.params.visited_capacity))
+        for gone in self.memory.evict_to_capacity((pose.x, pose.y)):
+            self.events.append(Event("tree_evicted", t_ms, gone, detail="treeCapacity lowered"))
+            if gone == self.target_id:
+                self._drop_target()
         hold = self._watch_link(t_ms)
         if hold is not None:
             self._last_tick = t_ms
@@ -299,7 +356,7 @@ class NavigationCore(object):
                    PHASE_FOLLOW_PATH: self._step_follow, PHASE_RETURN_TO_PATH: self._step_follow,
                    PHASE_APPROACH: self._step_approach, PHASE_RECOVERY: self._step_recovery,
                    PHASE_LAND: self._step_land, PHASE_DONE: self._step_done,
-                   PHASE_NO_DECK: self._step_done}[self.phase]
+                   PHASE_NO_DECK: self._step_done, PHASE_NO_CAMERA: self._step_done}[self.phase]
         command = handler(t_ms, pose)
         self._last_tick = t_ms
         return command
@@ -333,6 +390,10 @@ class NavigationCore(object):
 
     def abort_no_deck(self, t_ms):
         self._enter(PHASE_NO_DECK, t_ms)
+
+    def abort_no_camera(self, t_ms):
+        """The app never heard the camera before take-off: stay on the ground (null setpoints)."""
+        self._enter(PHASE_NO_CAMERA, t_ms)
 
     def _enter(self, phase, t_ms, detail=""):
         if phase != self.phase:
@@ -380,6 +441,8 @@ class NavigationCore(object):
             self.waypoint_index += 1
             self.events.append(Event("waypoint", t_ms, detail="%d" % (self.waypoint_index - 1)))
             if self.waypoint_index >= len(self.path):
+                if self._start_revisit(t_ms, pose):
+                    return self._step_recovery(t_ms, pose)
                 self._enter(PHASE_LAND, t_ms)
                 return self._step_land(t_ms, pose)
             goal = self.path[self.waypoint_index]
@@ -473,8 +536,7 @@ class NavigationCore(object):
         tree = self.memory.get(self.target_id)
         if tree is None:  # evicted meanwhile: nothing left to approach
             self._drop_target()
-            self._enter(PHASE_RETURN_TO_PATH, t_ms)
-            return self._hover()
+            return self._after_tree(t_ms, pose)
         if t_ms - self._target_since > p.target_timeout_ms:
             return self._abandon(t_ms, pose, tree)
         self._predict_filter(t_ms)
@@ -541,8 +603,39 @@ class NavigationCore(object):
         self.events.append(Event("tree_reached", t_ms, tree.id, cx, cy,
                                  detail="s_t %.3f %.3f" % (tree.x, tree.y)))
         self._drop_target()
-        self._enter(PHASE_RETURN_TO_PATH, t_ms)
-        return self._hover()
+        return self._after_tree(t_ms, pose)
+
+    def _after_tree(self, t_ms, pose):
+        """A target is done (reached, abandoned or evicted): back to the path, or, while going back for
+        abandoned trees after the last waypoint, on to the next one or to landing."""
+        if not self.revisiting:
+            self._enter(PHASE_RETURN_TO_PATH, t_ms)
+            return self._hover()
+        self.revisiting = False
+        if self._start_revisit(t_ms, pose):
+            return self._hover()
+        self._enter(PHASE_LAND, t_ms)
+        return self._step_land(t_ms, pose)
+
+    def _start_revisit(self, t_ms, pose):
+        """Go back once for the nearest tree abandoned while hidden (flagged in the visited list): restore it
+        into T_d as the target and fly to s_t by memory. False if there is none."""
+        flagged = [e for e in self.memory.visited if e.revisit]
+        if not flagged:
+            return False
+        cx, cy = self.camera_ground_point(pose)
+        entry = min(flagged, key=lambda e: (math.hypot(e.x - cx, e.y - cy), e.id))
+        p = self.params
+        tree, evicted = self.memory.restore(entry.id, p.min_hits, p.cam_width_px / 2.0, p.cam_height_px / 2.0,
+                                            (pose.x, pose.y))
+        for gone in evicted:
+            self.events.append(Event("tree_evicted", t_ms, gone, detail="T_d full"))
+        self.revisiting, self._revisit_arrived = True, False
+        self.target_id = tree.id
+        self._target_since = t_ms
+        self.events.append(Event("revisit", t_ms, tree.id, tree.x, tree.y, detail="abandoned while hidden"))
+        self._begin_recovery(t_ms, tree, 0.0, counted=False)
+        return True
 
     # -- recovery -----------------------------------------------------------------------------------------
 
@@ -560,24 +653,32 @@ class NavigationCore(object):
                                  detail=why))
         self._enter(PHASE_RECOVERY, t_ms)
 
-    def _abandon(self, t_ms, pose, tree):
+    def _abandon(self, t_ms, pose, tree, unseen=False):
+        """Give the target up. ``unseen``: recovery timed out without seeing it again (hidden); such a tree is
+        flagged for one more try before landing, unless this already was that try."""
         if tree is not None:
-            self.memory.mark_visited(tree.id, t_ms, (pose.x, pose.y), reached=False)
+            revisit = unseen and not self.revisiting
+            self.memory.mark_visited(tree.id, t_ms, (pose.x, pose.y), reached=False, revisit=revisit)
             self.counters.abandoned += 1
-            self.events.append(Event("abandoned", t_ms, tree.id, tree.x, tree.y))
+            self.events.append(Event("abandoned", t_ms, tree.id, tree.x, tree.y,
+                                     detail="unseen: will go back once" if revisit else ""))
         self._drop_target()
-        self._enter(PHASE_RETURN_TO_PATH, t_ms)
-        return self._hover()
+        return self._after_tree(t_ms, pose)
 
     def _step_recovery(self, t_ms, pose):
         p = self.params
         tree = self.memory.get(self.target_id)
-        if tree is None or t_ms - self._recovery_since > p.recovery_timeout_ms \
-                or t_ms - self._target_since > p.target_timeout_ms:
-            return self._abandon(t_ms, pose, tree)
         cx, cy = self.camera_ground_point(pose)
-        ex, ey = tree.x - cx, tree.y - cy
+        ex, ey = (tree.x - cx, tree.y - cy) if tree is not None else (0.0, 0.0)
         distance = math.hypot(ex, ey)
+        if self.revisiting and not self._revisit_arrived and tree is not None:
+            # going back: the recovery and target clocks start once the MAV is over s_t
+            self._revisit_arrived = distance <= p.return_tolerance_m
+            self._recovery_since = self._target_since = t_ms
+        if tree is None or t_ms - self._target_since > p.target_timeout_ms:
+            return self._abandon(t_ms, pose, tree)
+        if t_ms - self._recovery_since > p.recovery_timeout_ms:
+            return self._abandon(t_ms, pose, tree, unseen=True)
         speed = min(p.recovery_speed, p.servo_gain * distance)
         if distance < 1e-9:
             return self._hover()

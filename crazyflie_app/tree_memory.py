@@ -5,7 +5,9 @@ make a stored target index point at another (the C app kept ``KalmantreeNum`` as
 that ``removeCoordinate`` shifted). Both collections are bounded, and overflow is never silent:
 
 * T_d holds at most ``capacity`` trees; a new tree when full evicts the stored tree farthest from the MAV
-  (the least useful one) and counts it in ``evicted``;
+  (the least useful one) and counts it in ``evicted``, except the trees a detection of the same camera frame
+  was associated with (``protected``: evicting one would leave that detection pointing at nothing). When
+  every stored tree is protected, the new tree is not stored and counted in ``unstored``;
 * the visited list holds at most ``visited_capacity`` entries; when full the entry farthest from the MAV is
   forgotten and counted in ``visited_forgotten`` (the C app wrote past the end of ``treeBlacklist[10]``).
 
@@ -38,6 +40,7 @@ class VisitedTree:
     y: float
     t_ms: int
     reached: bool  # False: abandoned after a failed recovery
+    revisit: bool = False  # abandoned while unseen (hidden): the app goes back for it once before landing
 
 
 class TreeMemory(object):
@@ -49,6 +52,7 @@ class TreeMemory(object):
         self.trees = {}  # id -> StoredTree, in insertion order
         self.visited = []  # VisitedTree, oldest first
         self.evicted = 0
+        self.unstored = 0  # new trees not stored: T_d full of trees seen in the same frame
         self.visited_forgotten = 0
         self._next_id = 1
 
@@ -79,17 +83,32 @@ class TreeMemory(object):
                 result[i] = (kind, key if kind == "tree" else self.visited[-1 - key].id)
         return result
 
-    def add(self, x, y, t_ms, u, v, mav_xy):
-        """Store a new tree; returns (new id, [ids evicted to make room])."""
+    def add(self, x, y, t_ms, u, v, mav_xy, protected=()):
+        """Store a new tree; returns (new id, [ids evicted to make room]), or (0, []) when T_d is full of
+        ``protected`` trees (ids that must stay: detections of this frame refer to them)."""
         evicted = []
         while len(self.trees) >= self.capacity:
-            evicted.append(self._farthest(self.trees.values(), mav_xy).id)
+            candidates = [t for t in self.trees.values() if t.id not in protected]
+            if not candidates:
+                self.unstored += 1
+                return 0, evicted
+            evicted.append(self._farthest(candidates, mav_xy).id)
             del self.trees[evicted[-1]]
             self.evicted += 1
         tree = StoredTree(self._next_id, x, y, 1, t_ms, t_ms, u, v)
         self._next_id += 1
         self.trees[tree.id] = tree
         return tree.id, evicted
+
+    def evict_to_capacity(self, mav_xy):
+        """After ``capacity`` was lowered (a PARAM set in flight): evict the farthest trees until T_d fits;
+        returns their ids."""
+        evicted = []
+        while len(self.trees) > self.capacity:
+            evicted.append(self._farthest(self.trees.values(), mav_xy).id)
+            del self.trees[evicted[-1]]
+            self.evicted += 1
+        return evicted
 
     def update(self, tree_id, x, y, t_ms, u, v):
         """Merge one more detection into a stored tree (running mean of its position)."""
@@ -100,14 +119,32 @@ class TreeMemory(object):
         t.y += weight * (y - t.y)
         t.last_ms, t.u, t.v = t_ms, u, v
 
-    def mark_visited(self, tree_id, t_ms, mav_xy, reached=True):
-        """Move a tree from T_d to the visited list (reached, or abandoned when reached is False)."""
+    def mark_visited(self, tree_id, t_ms, mav_xy, reached=True, revisit=False):
+        """Move a tree from T_d to the visited list (reached, or abandoned when reached is False; ``revisit``
+        flags an abandoned tree worth going back for once)."""
         t = self.trees.pop(tree_id)
         while len(self.visited) >= self.visited_capacity:
             self.visited.remove(self._farthest(self.visited, mav_xy))
             self.visited_forgotten += 1
-        self.visited.append(VisitedTree(t.id, t.x, t.y, t_ms, reached))
+        self.visited.append(VisitedTree(t.id, t.x, t.y, t_ms, reached, revisit))
         return t
+
+    def restore(self, tree_id, hits, u, v, mav_xy):
+        """Move a visited entry back into T_d (same id and position, ``hits`` detections, last seen when it
+        was visited, image position (u, v)) so it can be a target again. A full T_d evicts its farthest tree
+        first, as ``add`` does. Returns (StoredTree or None if ``tree_id`` is not visited, [ids evicted])."""
+        entry = next((e for e in self.visited if e.id == tree_id), None)
+        if entry is None:
+            return None, []
+        self.visited.remove(entry)
+        evicted = []
+        while len(self.trees) >= self.capacity:
+            evicted.append(self._farthest(self.trees.values(), mav_xy).id)
+            del self.trees[evicted[-1]]
+            self.evicted += 1
+        tree = StoredTree(entry.id, entry.x, entry.y, hits, entry.t_ms, entry.t_ms, u, v)
+        self.trees[tree.id] = tree
+        return tree, evicted
 
     @staticmethod
     def _farthest(items, mav_xy):

@@ -3,7 +3,7 @@ import math
 
 import pytest
 
-from crazyflie_app.firmware import COMMANDER_PRIORITY_DISABLE, Crazyflie, MavModelConfig
+from crazyflie_app.firmware import COMMANDER_PRIORITY_DISABLE, Crazyflie, MavModelConfig, v_task_delay
 from crazyflie_app.navigation import (BOOT_DELAY_MS, LOG_TABLE, PARAM_TABLE, PRE_TAKEOFF_DELAY_MS, NavigationApp)
 from crazyflie_app.navigation_core import PHASE_FOLLOW_PATH, PHASE_NO_DECK, PHASE_TAKEOFF
 from jevois_module.ForaNavTrees import foranav_serial as fs
@@ -13,11 +13,25 @@ ALTITUDE_TOLERANCE = 0.05
 BOOTED_MS = BOOT_DELAY_MS + 10
 
 
-def make_app(decks=("bcFlow2", "bcLoco"), **model):
+CAMERA_FRAME_MS = 111  # the paper's 9 fps
+
+
+def make_app(decks=("bcFlow2", "bcLoco"), camera=False, **model):
+    """The app on loop://; ``camera``: a camera that sees nothing but ends a frame every CAMERA_FRAME_MS (the
+    app takes off only once it has heard the camera)."""
     cf = Crazyflie(seed=1, decks=decks, model_config=MavModelConfig(**model))
     app = NavigationApp(cf, PATH, "loop://")
     app.start()
+    if camera:
+        cf.x_task_create(empty_frames(app), "TEST_CAMERA", 6)
     return cf, app
+
+
+def empty_frames(app):
+    while True:
+        if app.link.port is not None:
+            app.link.port.write(b"MARK START\r\nMARK STOP\r\n")
+        yield v_task_delay(CAMERA_FRAME_MS)
 
 
 def console_text(cf):
@@ -35,14 +49,14 @@ def test_that_without_a_flow_deck_the_app_stops_and_never_commands():
 
 
 def test_that_without_a_loco_deck_the_app_warns_and_flies():
-    cf, app = make_app(decks=("bcFlow2",))
+    cf, app = make_app(decks=("bcFlow2",), camera=True)
     cf.run_until(BOOT_DELAY_MS + PRE_TAKEOFF_DELAY_MS + 100)
     assert any("No Loco deck" in line for line in console_text(cf))
     assert app.phase == PHASE_TAKEOFF
 
 
 def test_that_the_app_takes_off_to_the_altitude_param_and_follows_the_path():
-    cf, app = make_app()
+    cf, app = make_app(camera=True)
     cf.registry.param_set("app.altitude", 1.0)
     cf.run_until(BOOT_DELAY_MS + PRE_TAKEOFF_DELAY_MS + 8000)
     assert app.phase == PHASE_FOLLOW_PATH
@@ -55,19 +69,21 @@ def test_that_detection_lines_are_taken_and_everything_else_ignored():
     # Fixture: a booted app (estimate ids resolved), the camera writing into the loop port
     cf, app = make_app()
     cf.run_until(BOOTED_MS)
+    cf.model.truth.z = 1.25  # at flight height the two detections below are 0.55 m apart on the ground
+    cf.run_until(BOOTED_MS + 10)
     camera = app.link.port
     # Test: one frame with a T2 and an N2 among console noise, then an unterminated T2
     camera.write(b"OK\r\nALIVE\r\nERR Unknown command\r\n" + fs.format_t2(176, 44, 352, 288).encode()
                  + b"\r\n\x07\x08garbage\r\n" + fs.format_n2("oil_palm", 76, 144, 80, 80, 352, 288).encode()
                  + b"\r\nMARK STOP\r\nT2 0 0")
-    cf.run_until(BOOTED_MS + 20)
+    cf.run_until(BOOTED_MS + 30)
     # Assert: one frame with two detections (two trees: one frame never merges its own detections); the
     # unterminated T2 waits for its line end
     assert app.frames == 1
     assert app.core.counters.detections == 2
     assert app.num_trees == 2
     camera.write(b"\r\nMARK STOP\r\n")
-    cf.run_until(BOOTED_MS + 40)
+    cf.run_until(BOOTED_MS + 50)
     assert app.frames == 2 and app.core.counters.detections == 3
 
 
@@ -87,7 +103,7 @@ def test_that_every_param_is_documented_with_units_and_paper_defaults():
     cf, app = make_app()
     for entry in PARAM_TABLE.entries:
         assert entry.doc, entry.name
-        assert entry.unit or entry.name in ("columnFactor", "minHits", "treeCapacity", "visitedCap",
+        assert entry.unit or entry.name in ("columnFactor", "minHits", "treeCapacity", "visitedCap", "frameCap",
                                             "servoKiBand"), entry.name
     read = cf.registry.param_read
     assert read("app.altitude") == pytest.approx(1.25)

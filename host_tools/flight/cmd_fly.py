@@ -12,7 +12,8 @@ times --speed; --kill-camera-at S kills the camera process at S simulated second
 
 Prints the flight summary (a short table, or the JSON object with --json) and writes flight.tlog (MAVLink 2),
 trajectory.png and summary.json into --out (default runs/fly-<map>-seed<N>/). Exit status 0 when the flight
-completed, 1 when it did not (crash, watchdog lock, time limit), 2 on bad input.
+completed, 1 when it did not (crash, watchdog lock, time limit, camera never heard so never took off, camera
+link lost in flight), 2 on bad input.
 
 Examples:
   foranav fly --map map1
@@ -132,7 +133,9 @@ def print_table(summary, out=None):
     ci = summary["ci95_m"]
     print("map %s, seed %d: %s" % (summary["map"], summary["seed"],
                                    "SUCCESS" if summary["success"] else
-                                   ("completed" if summary["completed"] else "NOT COMPLETED")), file=out)
+                                   ("completed" if summary["completed"] else
+                                    "NOT STARTED: camera never heard, did not take off"
+                                    if summary.get("camera_never_heard") else "NOT COMPLETED")), file=out)
     print("  %-6s %-14s %s" % ("tree", "deviation (m)", "t (s)"), file=out)
     for r in summary["reached"]:
         print("  %-6s %-14.3f %.1f" % (r["id"] if r["id"] is not None else "-", r["deviation_m"], r["t_s"]),

@@ -47,7 +47,8 @@ import numpy as np
 from crazyflie_app.firmware import Crazyflie, MavModelConfig, v_task_delay
 from crazyflie_app.firmware.supervisor import LANDED, LOCKED, WARNING_LEVEL_OUT
 from crazyflie_app.navigation import NavigationApp
-from crazyflie_app.navigation_core import PHASE_APPROACH, PHASE_DONE, PHASE_NAMES, PHASE_NO_DECK, rotate
+from crazyflie_app.navigation_core import (PHASE_APPROACH, PHASE_DONE, PHASE_NAMES, PHASE_NO_CAMERA, PHASE_NO_DECK,
+                                           rotate)
 from host_tools import fileio
 from host_tools.errors import ForaNavError
 from host_tools.flight.stats import mean_ci95
@@ -318,10 +319,10 @@ class _Flight(object):
             if self.progress is not None and now % PROGRESS_PERIOD_MS == 0 and now > 0:
                 self.progress(now / 1000.0, PHASE_NAMES[phase])
             state = self.cf.supervisor.state
-            if phase in (PHASE_DONE, PHASE_NO_DECK) or state == LOCKED:
+            if phase in (PHASE_DONE, PHASE_NO_DECK, PHASE_NO_CAMERA) or state == LOCKED:
                 if self.done_ms is None:
                     self.done_ms = now
-                landed = state in (LANDED, LOCKED) or phase == PHASE_NO_DECK
+                landed = state in (LANDED, LOCKED) or phase in (PHASE_NO_DECK, PHASE_NO_CAMERA)
                 if landed and now - self.done_ms >= AFTER_LANDING_MS:
                     self.cf.scheduler.stop()
             yield v_task_delay(MONITOR_PERIOD_MS)
@@ -390,6 +391,7 @@ class _Flight(object):
             "serial_lines_dropped": self.app.link.lines_dropped,
             "link_losses": counters.link_losses,
             "link_aborted": self.app.core.link_aborted,
+            "camera_never_heard": self.app.phase == PHASE_NO_CAMERA,  # did not take off: not completed
             "hidden_tree": self.options["hide_tree"],
             "hidden_from_s": None if self.hide_started_ms is None else self.hide_started_ms / 1000.0,
         }

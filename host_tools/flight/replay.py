@@ -147,7 +147,9 @@ def replay_clip(clip, pmap=None, *, latency_ms=None, seed=0, params=None, app="p
         raise ForaNavError("--latency-ms: must not be negative")
     first = clip.frames[0].pose
     last_s = clip.frames[-1].t_s
-    options = {"start": (first.x, first.y), "max_time_s": last_s + 60.0, "params": params, "app": app}
+    # the clip starts once the app follows the path, so the app must not wait for the camera before take-off
+    options = {"start": (first.x, first.y), "max_time_s": last_s + 60.0,
+               "params": {"app.camWaitMs": 0, **(params or {})}, "app": app}
     camera = _ClipCamera(clip, pmap, latency_ms)
     flight = _ReplayFlight(pmap, clip, camera, seed, harness._options(options))
     flight.app.params.altitude_m = first.z  # the app flies at the recorded height

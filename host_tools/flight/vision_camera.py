@@ -175,7 +175,9 @@ class VisionCamera(object):
 
     def capture(self, t_ms, true_pose, hidden=frozenset()):
         if true_pose[2] <= MIN_RENDER_HEIGHT_M:
-            return []  # on the ground: the harness sees no frame (the camera is not streaming yet)
+            # on the ground: an empty frame, not rendered (the module streams from power-on, and the app
+            # takes off only once it has heard the camera)
+            return [foranav_serial.FRAME_START, foranav_serial.FRAME_STOP]
         frame = self.render(true_pose, hidden)
         lines = self.process(frame.image)
         self.last_frame = frame
