@@ -3,7 +3,8 @@ bolt/src/foranav_app.c, written here against the emulated firmware calls.
 
 ``CNavigationApp(cf, flight_path, target_label=None)`` is what ``foranav fly --app c`` flies. Its tasks do
 what ``appMain`` and the camera task of foranav_app.c do, call for call: wait for the system, check the decks,
-resolve the ``stateEstimate`` log ids, request arming, wait, then every 10 ms read the estimate, step the C
+resolve the ``stateEstimate`` log ids, wait, wait for the camera (``app.camWaitMs``), request arming, then
+every 10 ms read the estimate, step the C
 core and send its setpoint at COMMANDER_PRIORITY_EXTRX; the camera task reads UART2 in 64-byte chunks
 (``uart2GetDataWithTimeout``) and feeds the bytes to the C camera input (line assembler, T2/N2/MARK parser,
 frames), which hands each frame to the C core. PARAM and LOG tables are the Python app's (same names, same
@@ -18,7 +19,7 @@ from crazyflie_app.firmware.commander import COMMANDER_PRIORITY_EXTRX, setpoint_
 from crazyflie_app.firmware.freertos import PORT_MAX_DELAY, m2t, v_task_delay
 from crazyflie_app.firmware.logparam import LOG_VARID_INVALID, PARAM_VARID_INVALID
 from crazyflie_app.navigation import (APP_PERIOD_MS, APP_TASK_PRI, BOOT_DELAY_MS, CAMERA_TASK_PERIOD_MS,
-                                      CAMERA_TASK_PRI, DEBUG_MODULE, LOG_TABLE, PARAM_TABLE, PRE_TAKEOFF_DELAY_MS,
+                                      CAMERA_TASK_PRI, CAMERA_WAIT_POLL_MS, DEBUG_MODULE, LOG_TABLE, PARAM_TABLE, PRE_TAKEOFF_DELAY_MS,
                                       set_hover_setpoint, set_null_setpoint)
 
 UART2_BAUDRATE = 115200
@@ -80,12 +81,25 @@ class CNavigationApp(object):
             yield v_task_delay(PORT_MAX_DELAY)
             return
         self._estimate_ids = ids
+        yield v_task_delay(m2t(PRE_TAKEOFF_DELAY_MS))
+        waited_ms = 0
+        while not self.core.camera_alive(cf.x_task_get_tick_count()):
+            if waited_ms >= self.params.camera_wait_ms:
+                cf.debug_print(DEBUG_MODULE, "No camera heard for %s s, not taking off"
+                               % self.core.format_fixed(self.params.camera_wait_ms / 1000.0, 1))
+                self.core.abort_no_camera(cf.x_task_get_tick_count())
+                self._print_events()
+                yield v_task_delay(PORT_MAX_DELAY)
+                return
+            if waited_ms == 0:
+                cf.debug_print(DEBUG_MODULE, "Waiting for the camera")
+            yield v_task_delay(m2t(CAMERA_WAIT_POLL_MS))
+            waited_ms += CAMERA_WAIT_POLL_MS
         if not cf.supervisor_request_arming(True):
             cf.debug_print(DEBUG_MODULE, "Arming refused by the supervisor, aborting")
             yield v_task_delay(PORT_MAX_DELAY)
             return
         cf.debug_print(DEBUG_MODULE, "Armed")
-        yield v_task_delay(m2t(PRE_TAKEOFF_DELAY_MS))
         self.core.start(cf.x_task_get_tick_count())
         self._print_events()
         while True:
@@ -147,6 +161,10 @@ class CNavigationApp(object):
     detections = property(lambda self: self.core.status().detections)
     out_of_column = property(lambda self: self.core.status().out_of_column)
     evicted = property(lambda self: self.core.status().evicted)
+    unstored = property(lambda self: self.core.status().unstored)
+    duplicates = property(lambda self: self.core.status().duplicates)
+    frame_overflow = property(lambda self: self.core.frame_overflow)
+    pending_detections = property(lambda self: self.core.pending_detections)
     forgotten = property(lambda self: self.core.status().forgotten)
     captured = property(lambda self: int(self.core.captured))
     err_u = property(lambda self: self.core.pixel_error[0])

@@ -28,7 +28,7 @@ HEADERS = ("nav_core.h",)
 LIBRARY = REPO / "build" / "libforanav_nav.so"
 HOST_CFLAGS = ("-std=c11", "-O2", "-Wall", "-Wextra", "-Werror", "-fPIC", "-shared")
 EVENT_KINDS = ("phase", "tree_added", "tree_evicted", "target_selected", "tree_reached", "recovery",
-               "approach_by_memory", "reacquired", "abandoned", "waypoint", "link_lost", "link_restored")
+               "approach_by_memory", "reacquired", "abandoned", "waypoint", "link_lost", "link_restored", "revisit")
 LINE_KINDS = (None, "T2", "N2", "MARK START", "MARK STOP")
 TEXT_SIZE = 160
 MAX_ROWS = 256
@@ -37,15 +37,18 @@ _D, _I = ctypes.c_double, ctypes.c_int32
 # NavParams of nav_core.h, in its order; the names are NavigationParams' fields (a test checks they agree)
 _INT_PARAMS = {"takeoff_settle_ms", "land_step_ms", "settle_dwell_ms", "settle_grace_ms", "lost_timeout_ms",
                "recovery_timeout_ms", "target_timeout_ms", "min_hits", "tree_capacity", "visited_capacity",
-               "cam_width_px", "cam_height_px", "cam_latency_ms", "link_hold_ms", "link_land_ms"}
+               "cam_width_px", "cam_height_px", "cam_latency_ms", "link_hold_ms", "link_land_ms", "camera_wait_ms",
+               "frame_capacity"}
 PARAM_NAMES = (
     "altitude_m", "takeoff_tolerance_m", "takeoff_settle_ms", "land_height_m", "land_final_m", "land_step_ms",
     "arrival_min_speed", "cruise_speed", "waypoint_tolerance_m", "lookahead_m", "approach_speed", "servo_gain",
     "capture_radius_px", "settle_radius_px", "settle_dwell_ms", "settle_speed", "settle_relax", "settle_grace_ms",
     "servo_integral", "servo_integral_band", "recovery_distance_m", "lost_timeout_ms", "recovery_timeout_ms",
-    "target_timeout_ms", "recovery_speed", "return_tolerance_m", "merge_radius_m", "crown_size_m", "column_factor",
+    "target_timeout_ms", "recovery_speed", "return_tolerance_m", "merge_radius_m", "duplicate_radius_m",
+    "crown_size_m", "column_factor",
     "min_hits", "tree_capacity", "visited_capacity", "cam_width_px", "cam_height_px", "cam_scale", "cam_offset_x_m",
-    "cam_offset_y_m", "cam_latency_ms", "kf_measurement_std_px", "kf_accel_psd", "link_hold_ms", "link_land_ms")
+    "cam_offset_y_m", "cam_latency_ms", "kf_measurement_std_px", "kf_accel_psd", "link_hold_ms", "link_land_ms",
+    "camera_wait_ms", "frame_capacity")
 _PARAM_FIELDS = [(name, _I if name in _INT_PARAMS else _D) for name in PARAM_NAMES]
 
 
@@ -63,8 +66,9 @@ class _Status(ctypes.Structure):
                                         "captured", "link_lost", "link_aborted", "has_target")]
                 + [(name, ctypes.c_uint32) for name in (
                     "detections", "out_of_column", "on_visited", "reached", "recoveries", "abandoned", "link_losses",
-                    "evicted", "forgotten", "lines_dropped", "other_labels", "frames", "frames_truncated",
-                    "events_dropped")]
+                    "duplicates", "evicted", "forgotten", "lines_dropped", "other_labels", "frames", "frame_overflow",
+                    "events_dropped", "unstored")]
+                + [(name, _I) for name in ("pending_detections", "revisiting")]
                 + [(name, _D) for name in ("err_u", "err_v", "target_x", "target_y")])
 
 
@@ -111,7 +115,9 @@ def load_library():
     lib.navHostParams.restype = P(CParams)
     lib.navHostParams.argtypes = [ctypes.c_void_p]
     lib.navHostDefaults.argtypes = [P(CParams)]
-    for name in ("navHostStart", "navHostAbortNoDeck", "navHostOnFrameMark"):
+    lib.navHostCameraAlive.restype = _I
+    lib.navHostCameraAlive.argtypes = [ctypes.c_void_p, _I]
+    for name in ("navHostStart", "navHostAbortNoDeck", "navHostAbortNoCamera", "navHostOnFrameMark"):
         getattr(lib, name).argtypes = [ctypes.c_void_p, _I]
     lib.navHostStep.restype = _I
     lib.navHostStep.argtypes = [ctypes.c_void_p, _I, P(_D), P(_D)]
@@ -132,6 +138,8 @@ def load_library():
                                      ctypes.c_char_p, _I]
     lib.navHostParseLine.restype = _I
     lib.navHostParseLine.argtypes = [ctypes.c_char_p, _I, ctypes.c_char_p, _I, P(_D)]
+    lib.navHostFormatFixed.restype = _I
+    lib.navHostFormatFixed.argtypes = [ctypes.c_char_p, _I, _D, _I]
     lib.navHostMaxFrameDetections.restype = _I
     lib.navHostSizeofParams.restype = _I
     if lib.navHostSizeofParams() != ctypes.sizeof(CParams):
@@ -177,6 +185,7 @@ class CVisited:
     y: float
     t_ms: int
     reached: bool
+    revisit: bool = False
 
 
 class _MemoryView(object):
@@ -185,19 +194,20 @@ class _MemoryView(object):
     def __init__(self, core):
         self._core = core
 
-    def _rows(self, fn):
-        out = (_D * (5 * MAX_ROWS))()
+    def _rows(self, fn, width):
+        out = (_D * (width * MAX_ROWS))()
         n = fn(self._core.handle, out, MAX_ROWS)
-        return [tuple(out[5 * i:5 * i + 5]) for i in range(n)]
+        return [tuple(out[width * i:width * i + width]) for i in range(n)]
 
     @property
     def trees(self):
         return {int(r[0]): CTree(int(r[0]), r[1], r[2], int(r[3]), int(r[4]))
-                for r in self._rows(self._core.lib.navHostTrees)}
+                for r in self._rows(self._core.lib.navHostTrees, 5)}
 
     @property
     def visited(self):
-        return [CVisited(int(r[0]), r[1], r[2], int(r[3]), bool(r[4])) for r in self._rows(self._core.lib.navHostVisited)]
+        return [CVisited(int(r[0]), r[1], r[2], int(r[3]), bool(r[4]), bool(r[5]))
+                for r in self._rows(self._core.lib.navHostVisited, 6)]
 
     def get(self, tree_id):
         return self.trees.get(tree_id)
@@ -206,6 +216,7 @@ class _MemoryView(object):
         return self._core.status().num_trees
 
     evicted = property(lambda self: self._core.status().evicted)
+    unstored = property(lambda self: self._core.status().unstored)
     visited_forgotten = property(lambda self: self._core.status().forgotten)
 
 
@@ -258,6 +269,20 @@ class CNavigationCore(object):
     def abort_no_deck(self, t_ms):
         self.lib.navHostAbortNoDeck(self.handle, int(t_ms))
         self._drain()
+
+    def abort_no_camera(self, t_ms):
+        self.lib.navHostAbortNoCamera(self.handle, int(t_ms))
+        self._drain()
+
+    def format_fixed(self, value, decimals):
+        """The C console's number format ("%.*f", as the Bolt build prints it)."""
+        out = ctypes.create_string_buffer(48)
+        self.lib.navHostFormatFixed(out, len(out), float(value), int(decimals))
+        return out.value.decode("ascii")
+
+    def camera_alive(self, t_ms):
+        """The adapters' pre-flight check: a camera message within app.linkHoldMs (camWaitMs 0: none)."""
+        return bool(self.lib.navHostCameraAlive(self.handle, int(t_ms)))
 
     def step(self, t_ms, pose):
         kind = self.lib.navHostStep(self.handle, int(t_ms), self._set_pose(pose), self._out)
@@ -333,6 +358,9 @@ class CNavigationCore(object):
     lines_dropped = property(lambda self: self.status().lines_dropped)
     other_labels = property(lambda self: self.status().other_labels)
     frames = property(lambda self: self.status().frames)
+    frame_overflow = property(lambda self: self.status().frame_overflow)
+    pending_detections = property(lambda self: self.status().pending_detections)
+    revisiting = property(lambda self: bool(self.status().revisiting))
 
     @property
     def pixel_error(self):
@@ -348,4 +376,4 @@ class CNavigationCore(object):
     def counters(self):
         s = self.status()
         return Counters(s.detections, s.out_of_column, s.on_visited, s.reached, s.recoveries, s.abandoned,
-                        s.link_losses)
+                        s.link_losses, s.duplicates)

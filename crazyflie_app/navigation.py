@@ -141,12 +141,6 @@ class NavigationApp(object):
             yield v_task_delay(PORT_MAX_DELAY)
             return
         self._estimate_ids = ids
-        # the Bolt requires arming (CONFIG_MOTORS_REQUIRE_ARMING): until armed every setpoint is the null one
-        if not cf.supervisor_request_arming(True):
-            cf.debug_print(DEBUG_MODULE, "Arming refused by the supervisor, aborting")
-            yield v_task_delay(PORT_MAX_DELAY)
-            return
-        cf.debug_print(DEBUG_MODULE, "Armed")
         yield v_task_delay(m2t(PRE_TAKEOFF_DELAY_MS))
         waited_ms = 0
         while not self.camera_alive(cf.x_task_get_tick_count()):
@@ -162,6 +156,13 @@ class NavigationApp(object):
                 cf.debug_print(DEBUG_MODULE, "Waiting for the camera")
             yield v_task_delay(m2t(CAMERA_WAIT_POLL_MS))
             waited_ms += CAMERA_WAIT_POLL_MS
+        # the last check passed. The Bolt requires arming (CONFIG_MOTORS_REQUIRE_ARMING): until armed the
+        # supervisor replaces every setpoint by the null one
+        if not cf.supervisor_request_arming(True):
+            cf.debug_print(DEBUG_MODULE, "Arming refused by the supervisor, aborting")
+            yield v_task_delay(PORT_MAX_DELAY)
+            return
+        cf.debug_print(DEBUG_MODULE, "Armed")
         self.core.start(cf.x_task_get_tick_count())
         self._print_events()
         while True:

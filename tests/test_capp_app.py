@@ -12,9 +12,10 @@ import pytest
 
 from crazyflie_app import c_core
 from crazyflie_app.c_app import CNavigationApp
-from crazyflie_app.firmware import COMMANDER_PRIORITY_DISABLE, Crazyflie
+from crazyflie_app.firmware import COMMANDER_PRIORITY_DISABLE, Crazyflie, v_task_delay
 from crazyflie_app.navigation import BOOT_DELAY_MS, LOG_TABLE, PARAM_TABLE, PRE_TAKEOFF_DELAY_MS
-from crazyflie_app.navigation_core import (PHASE_FOLLOW_PATH, PHASE_NO_DECK, PHASE_TAKEOFF, NavigationParams)
+from crazyflie_app.navigation_core import (PHASE_FOLLOW_PATH, PHASE_NO_CAMERA, PHASE_NO_DECK, PHASE_TAKEOFF,
+                                           NavigationParams)
 from host_tools.flight import run_flight
 from host_tools.flight.oracle import OracleCamera
 from host_tools.flight.wire import PtyWire
@@ -29,12 +30,16 @@ MAX_MEAN_DEVIATION_M = 0.05
 
 @pytest.fixture
 def wired_cf():
+    """make(camera=True, **Crazyflie kwargs): a Crazyflie with a pty on UART2 and, with camera, a camera task
+    sending an empty frame (MARK STOP) every 100 ms, as the module does on the ground."""
     wire = PtyWire()
     made = []
 
-    def make(**kwargs):
+    def make(camera=True, **kwargs):
         cf = Crazyflie(seed=1, **kwargs)
         cf.attach_uart2(wire.slave_path)
+        if camera:
+            cf.x_task_create(empty_frames(wire), "CAM", 6)
         made.append(cf)
         return cf
 
@@ -42,6 +47,12 @@ def wired_cf():
     for cf in made:
         cf.uart2.close()
     wire.close()
+
+
+def empty_frames(wire, period_ms=100):
+    while True:
+        wire.write(fs.FRAME_STOP.encode() + b"\r\n")
+        yield v_task_delay(period_ms)
 
 
 def console(cf):
@@ -65,15 +76,26 @@ def test_that_the_c_app_arms_after_its_checks_and_takes_off_to_the_altitude_para
     app.start()
     cf.registry.param_set("app.altitude", 1.0)  # lands in the C struct
     assert app.core.params.altitude_m == 1.0
-    cf.run_until(BOOT_DELAY_MS + 100)
-    assert cf.supervisor_is_armed() and "Armed" in console(cf)
+    cf.run_until(BOOT_DELAY_MS + PRE_TAKEOFF_DELAY_MS - 100)
+    assert not cf.supervisor_is_armed()  # the camera check comes last, then arming
     cf.run_until(BOOT_DELAY_MS + PRE_TAKEOFF_DELAY_MS + 100)
+    assert cf.supervisor_is_armed() and "Armed" in console(cf)
     assert app.phase == PHASE_TAKEOFF
     cf.run_until(BOOT_DELAY_MS + PRE_TAKEOFF_DELAY_MS + 8000)
     assert app.phase == PHASE_FOLLOW_PATH
     assert cf.model.truth.z == pytest.approx(1.0, abs=0.05)
     assert cf.registry.log_read("app.phase") == PHASE_FOLLOW_PATH
     assert "phase FOLLOW_PATH" in console(cf)
+
+
+def test_that_the_c_app_never_arms_nor_takes_off_without_a_camera(wired_cf):
+    cf = wired_cf(camera=False)
+    app = CNavigationApp(cf, PATH)
+    app.start()
+    cf.run_until(BOOT_DELAY_MS + PRE_TAKEOFF_DELAY_MS + 25000)
+    assert app.phase == PHASE_NO_CAMERA
+    assert not cf.supervisor_is_armed() and cf.model.truth.z == 0.0
+    assert "Waiting for the camera" in console(cf) and "No camera heard for 20.0 s, not taking off" in console(cf)
 
 
 def test_that_the_c_params_mirror_the_python_params_field_by_field():

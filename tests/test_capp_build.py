@@ -63,17 +63,15 @@ ARM_GCC = shutil.which("arm-none-eabi-gcc")
 
 @pytest.mark.skipif(ARM_GCC is None, reason="arm-none-eabi-gcc not installed (apt-get install gcc-arm-none-eabi)")
 def test_that_the_core_compiles_for_the_bolt_under_werror_and_imports_nothing_unlinkable(tmp_path):
-    imports = set()
+    imports, defined = set(), set()
     for name in CORE_SOURCES:
         obj = tmp_path / name.replace(".c", ".o")
         subprocess.run([ARM_GCC, *ARM_FLAGS, *BOLT_DEFINES, "-c", str(c_core.SOURCE_DIR / name), "-o", str(obj)],
                        check=True, capture_output=True, text=True)
-        symbols = subprocess.run(["arm-none-eabi-nm", "-u", str(obj)], check=True, capture_output=True, text=True)
-        imports |= {line.split()[-1] for line in symbols.stdout.splitlines() if line.strip()}
-    internal = {"navKalmanInit", "navKalmanPredict", "navKalmanUpdate", "navTreesInit", "navTreesGet",
-                "navTreesAssociate", "navTreesAdd", "navTreesUpdate", "navTreesMarkVisited", "navCoreOnFrame",
-                "navCoreOnFrameMark", "navParseLine", "navStdToImgX", "navStdToImgY", "navLineAssemblerPush",
-                "navLineAssemblerInit", "navCoreTarget", "navFocalPx"}
+        for flag, names in (("-u", imports), ("--defined-only", defined)):
+            symbols = subprocess.run(["arm-none-eabi-nm", flag, str(obj)], check=True, capture_output=True, text=True)
+            names |= {line.split()[-1] for line in symbols.stdout.splitlines() if line.strip()}
+    internal = imports & defined  # the core's own functions, called across its files
     libgcc = {name for name in imports if name.startswith("__aeabi_")}  # soft double, division: libgcc
     assert imports - internal - libgcc <= ARM_ALLOWED_IMPORTS, sorted(imports - internal - libgcc - ARM_ALLOWED_IMPORTS)
     assert not imports & {"malloc", "free", "snprintf", "printf", "strtod", "sprintf"}

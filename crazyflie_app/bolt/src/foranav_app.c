@@ -3,8 +3,8 @@
  * (nav_core.c, nav_kalman.c, nav_trees.c, nav_serial.c), the C twin of crazyflie_app/navigation.py.
  *
  * appMain waits for the system, checks the decks (deck.bcFlow2 required, deck.bcLoco advised), resolves the
- * stateEstimate log ids once, requests arming (the Bolt requires it: CONFIG_MOTORS_REQUIRE_ARMING), waits
- * 3 s, then every 10 ms reads the estimate, steps the core and sends its setpoint with
+ * stateEstimate log ids once, waits 3 s, waits for the camera (app.camWaitMs, else NO_CAMERA: never armed),
+ * requests arming (the Bolt requires it: CONFIG_MOTORS_REQUIRE_ARMING), then every 10 ms reads the estimate, steps the core and sends its setpoint with
  * commanderSetSetpoint(..., COMMANDER_PRIORITY_EXTRX). The camera task reads the JeVois' text lines from
  * UART2 (115200 baud; the driver's receive buffer holds 200 bytes, so it is drained every 10 ms) and feeds
  * them to the core's line assembler and parser. The two tasks share the core under a mutex.
@@ -39,6 +39,7 @@
 #define PRE_TAKEOFF_DELAY_MS 3000  /* ... and 3 s more before take-off */
 #define APP_PERIOD_MS 10           /* the main loop */
 #define CAMERA_PERIOD_MS 10        /* UART2 polling: 200 bytes hold 17 ms of 115200 baud */
+#define CAMERA_WAIT_POLL_MS 10     /* pre-flight camera check */
 #define CAMERA_TASK_PRI 1
 #define CAMERA_TASK_STACKSIZE 800 /* words: the frame path (association, events) needs ~2 kB */
 #define UART2_BAUDRATE 115200
@@ -83,9 +84,12 @@ static struct {
   uint32_t targetTimeout;
   uint16_t linkHoldMs;
   uint16_t linkLandMs;
+  uint16_t camWaitMs;
+  uint8_t frameCap;
   float recoverySpeed;
   float returnTol;
   float mergeRadius;
+  float dupRadius;
   float crownSize;
   float columnFactor;
   uint8_t minHits;
@@ -128,9 +132,12 @@ static void paramsToCore(NavParams* p) {
   p->target_timeout_ms = (int32_t)appParams.targetTimeout;
   p->link_hold_ms = (int32_t)appParams.linkHoldMs;
   p->link_land_ms = (int32_t)appParams.linkLandMs;
+  p->camera_wait_ms = (int32_t)appParams.camWaitMs;
+  p->frame_capacity = (int32_t)appParams.frameCap;
   p->recovery_speed = (double)appParams.recoverySpeed;
   p->return_tolerance_m = (double)appParams.returnTol;
   p->merge_radius_m = (double)appParams.mergeRadius;
+  p->duplicate_radius_m = (double)appParams.dupRadius;
   p->crown_size_m = (double)appParams.crownSize;
   p->column_factor = (double)appParams.columnFactor;
   p->min_hits = (int32_t)appParams.minHits;
@@ -173,9 +180,12 @@ static void paramsFromCore(const NavParams* p) {
   appParams.targetTimeout = (uint32_t)p->target_timeout_ms;
   appParams.linkHoldMs = (uint16_t)p->link_hold_ms;
   appParams.linkLandMs = (uint16_t)p->link_land_ms;
+  appParams.camWaitMs = (uint16_t)p->camera_wait_ms;
+  appParams.frameCap = (uint8_t)p->frame_capacity;
   appParams.recoverySpeed = (float)p->recovery_speed;
   appParams.returnTol = (float)p->return_tolerance_m;
   appParams.mergeRadius = (float)p->merge_radius_m;
+  appParams.dupRadius = (float)p->duplicate_radius_m;
   appParams.crownSize = (float)p->crown_size_m;
   appParams.columnFactor = (float)p->column_factor;
   appParams.minHits = (uint8_t)p->min_hits;
@@ -209,13 +219,15 @@ static struct {
   uint32_t detections;
   uint32_t outOfColumn;
   uint16_t evicted;
+  uint16_t unstored;
+  uint32_t duplicates;
+  uint32_t frameOverflow;
   uint16_t forgotten;
   uint32_t linkDropped;
   uint16_t linkOpens;
   uint8_t linkLost;
   uint16_t linkLosses;
 } appLog;
-
 
 static void setHoverSetpoint(setpoint_t* sp, float vx, float vy, float z, float yaw) {
   sp->mode.x = modeVelocity;
@@ -267,6 +279,9 @@ static void refreshLog(void) {
   appLog.detections = core.counters.detections;
   appLog.outOfColumn = core.counters.out_of_column;
   appLog.evicted = (uint16_t)core.memory.evicted;
+  appLog.unstored = (uint16_t)core.memory.unstored;
+  appLog.duplicates = core.counters.duplicates;
+  appLog.frameOverflow = camera.frame_overflow;
   appLog.forgotten = (uint16_t)core.memory.visited_forgotten;
   appLog.linkDropped = camera.assembler.dropped;
   appLog.linkOpens = 1;
@@ -340,13 +355,39 @@ void appMain(void) {
   xSemaphoreTake(coreMutex, portMAX_DELAY);
   estimateReady = true;
   xSemaphoreGive(coreMutex);
-  /* the Bolt requires arming: until armed, the supervisor replaces every setpoint by the null one */
+  vTaskDelay(M2T(PRE_TAKEOFF_DELAY_MS));
+  /* a camera never heard is a camera lost: flying the path blind would "complete" nothing */
+  for (int32_t waited = 0;; waited += CAMERA_WAIT_POLL_MS) {
+    xSemaphoreTake(coreMutex, portMAX_DELAY);
+    paramsToCore(&core.params);
+    const bool alive = navCameraInputAlive(&camera, &core.params, (int32_t)xTaskGetTickCount());
+    const bool give_up = !alive && waited >= core.params.camera_wait_ms;
+    if (give_up) {
+      char seconds[16];
+      navFormatFixed(seconds, sizeof(seconds), (double)core.params.camera_wait_ms / 1000.0, 1);
+      DEBUG_PRINT("No camera heard for %s s, not taking off\n", seconds);
+      navCoreAbortNoCamera(&core, (int32_t)xTaskGetTickCount());
+      printEvents();
+    }
+    xSemaphoreGive(coreMutex);
+    if (alive) {
+      break;
+    }
+    if (give_up) {
+      return; /* never armed: the Bolt stays on the ground */
+    }
+    if (waited == 0) {
+      DEBUG_PRINT("Waiting for the camera\n");
+    }
+    vTaskDelay(M2T(CAMERA_WAIT_POLL_MS));
+  }
+  /* the last check passed. The Bolt requires arming: until armed, the supervisor replaces every setpoint by
+   * the null one */
   if (!supervisorRequestArming(true)) {
     DEBUG_PRINT("Arming refused by the supervisor, aborting\n");
     return;
   }
   DEBUG_PRINT("Armed\n");
-  vTaskDelay(M2T(PRE_TAKEOFF_DELAY_MS));
   xSemaphoreTake(coreMutex, portMAX_DELAY);
   navCoreStart(&core, (int32_t)xTaskGetTickCount());
   printEvents();
@@ -475,6 +516,14 @@ PARAM_ADD(PARAM_UINT16, linkHoldMs, &appParams.linkHoldMs)
  */
 PARAM_ADD(PARAM_UINT16, linkLandMs, &appParams.linkLandMs)
 /**
+ * @brief before take-off: no camera line heard within linkHoldMs for this long -> NO_CAMERA, stay on the ground (0: no check) (ms)
+ */
+PARAM_ADD(PARAM_UINT16, camWaitMs, &appParams.camWaitMs)
+/**
+ * @brief detections kept per frame; more before the frame's MARK STOP are dropped (LOG frameOverflow) (-)
+ */
+PARAM_ADD(PARAM_UINT8, frameCap, &appParams.frameCap)
+/**
  * @brief speed when re-approaching s_t (m/s)
  */
 PARAM_ADD(PARAM_FLOAT, recoverySpeed, &appParams.recoverySpeed)
@@ -486,6 +535,10 @@ PARAM_ADD(PARAM_FLOAT, returnTol, &appParams.returnTol)
  * @brief detections this close to a stored tree are the same tree (Navigation.c: 0.45 m) (m)
  */
 PARAM_ADD(PARAM_FLOAT, mergeRadius, &appParams.mergeRadius)
+/**
+ * @brief detections of one frame this close are one crown seen twice and merged (trees stand >= a crown apart) (m)
+ */
+PARAM_ADD(PARAM_FLOAT, dupRadius, &appParams.dupRadius)
 /**
  * @brief crown size of a mature tree (planting column) (m)
  */
@@ -605,6 +658,18 @@ LOG_ADD(LOG_UINT32, outOfColumn, &appLog.outOfColumn)
  * @brief trees evicted from a full T_d (-)
  */
 LOG_ADD(LOG_UINT16, evicted, &appLog.evicted)
+/**
+ * @brief new trees not stored: T_d full of trees of the same frame (-)
+ */
+LOG_ADD(LOG_UINT16, unstored, &appLog.unstored)
+/**
+ * @brief detections merged with another of the same frame (-)
+ */
+LOG_ADD(LOG_UINT32, duplicates, &appLog.duplicates)
+/**
+ * @brief detections dropped beyond frameCap in a frame (-)
+ */
+LOG_ADD(LOG_UINT32, frameOverflow, &appLog.frameOverflow)
 /**
  * @brief visited entries forgotten from a full list (-)
  */

@@ -20,13 +20,13 @@ static const double DEG_TO_RAD = 3.14159265358979323846 / 180.0; /* CPython math
 static const double INITIAL_VELOCITY_STD = 100.0;                 /* px/s, PixelKalmanFilter default */
 
 static const char* const PHASE_NAMES[] = {"BOOT", "TAKEOFF", "FOLLOW_PATH", "APPROACH", "RECOVERY",
-                                          "RETURN_TO_PATH", "LAND", "DONE", "NO_DECK"};
+                                          "RETURN_TO_PATH", "LAND", "DONE", "NO_DECK", "NO_CAMERA"};
 static const char* const EVENT_NAMES[] = {"phase", "tree_added", "tree_evicted", "target_selected",
                                           "tree_reached", "recovery", "approach_by_memory", "reacquired",
-                                          "abandoned", "waypoint", "link_lost", "link_restored"};
+                                          "abandoned", "waypoint", "link_lost", "link_restored", "revisit"};
 
 const char* navPhaseName(int32_t phase) {
-  return (phase >= 0 && phase <= NAV_PHASE_NO_DECK) ? PHASE_NAMES[phase] : "?";
+  return (phase >= 0 && phase <= NAV_PHASE_NO_CAMERA) ? PHASE_NAMES[phase] : "?";
 }
 
 const char* navEventKindName(int32_t kind) {
@@ -62,6 +62,7 @@ void navParamsDefaults(NavParams* p) {
   p->recovery_speed = 0.10;
   p->return_tolerance_m = 0.05;
   p->merge_radius_m = 0.45;
+  p->duplicate_radius_m = 0.25;
   p->crown_size_m = 0.35;
   p->column_factor = 1.5;
   p->min_hits = 2;
@@ -77,6 +78,8 @@ void navParamsDefaults(NavParams* p) {
   p->kf_accel_psd = 400.0;
   p->link_hold_ms = 1000;
   p->link_land_ms = 10000;
+  p->camera_wait_ms = 20000;
+  p->frame_capacity = 64;
 }
 
 double navFocalPx(const NavParams* p) {
@@ -238,6 +241,8 @@ void navCoreStart(NavCore* core, int32_t t_ms) { enterPhase(core, NAV_PHASE_TAKE
 
 void navCoreAbortNoDeck(NavCore* core, int32_t t_ms) { enterPhase(core, NAV_PHASE_NO_DECK, t_ms); }
 
+void navCoreAbortNoCamera(NavCore* core, int32_t t_ms) { enterPhase(core, NAV_PHASE_NO_CAMERA, t_ms); }
+
 const NavTree* navCoreTarget(const NavCore* core) {
   return core->target_id ? navTreesGet((NavTreeMemory*)&core->memory, core->target_id) : NULL;
 }
@@ -304,6 +309,78 @@ void navCoreOnFrameMark(NavCore* core, int32_t t_ms) {
   core->last_frame_ms = t_ms;
 }
 
+/* Detections of one frame closer than radius on the ground are one tree seen twice (overlapping detector
+ * windows on one big crown): greedy in line order, each joins the first kept one within the radius (running
+ * mean of pixel and ground position) or is kept (navigation_core.merge_duplicates). */
+static int32_t mergeDuplicates(NavCore* core, const NavDetection* detections, int32_t count, double radius) {
+  int32_t kept = 0;
+  for (int32_t i = 0; i < count; i++) {
+    const double x = core->last_frame_points[i][0], y = core->last_frame_points[i][1];
+    int32_t k = 0;
+    for (; k < kept; k++) {
+      const double ox = core->merged_points[k][0], oy = core->merged_points[k][1];
+      if (hypot(x - ox, y - oy) < radius) {
+        const int32_t n = core->merged_counts[k] + 1;
+        const NavDetection other = core->merged[k];
+        core->merged[k].u = other.u + (detections[i].u - other.u) / (double)n;
+        core->merged[k].v = other.v + (detections[i].v - other.v) / (double)n;
+        core->merged_points[k][0] = ox + (x - ox) / (double)n;
+        core->merged_points[k][1] = oy + (y - oy) / (double)n;
+        core->merged_counts[k] = n;
+        break;
+      }
+    }
+    if (k == kept) {
+      core->merged[kept] = detections[i];
+      core->merged_points[kept][0] = x;
+      core->merged_points[kept][1] = y;
+      core->merged_counts[kept] = 1;
+      kept++;
+    }
+    core->owner[i] = k;
+  }
+  return kept;
+}
+
+/* One de-duplicated detection of a frame -> the id of its tree (0: ignored). */
+static int32_t takeDetection(NavCore* core, int32_t t_ms, int32_t k, int32_t* num_protected, const NavPose* capture,
+                             const NavPose* pose_now) {
+  const NavDetection* det = &core->merged[k];
+  const double wx = core->merged_points[k][0], wy = core->merged_points[k][1];
+  int32_t tree_id = core->assignment[k].id;
+  if (core->assignment[k].kind == 2) {
+    core->counters.on_visited++;
+    return tree_id;
+  }
+  if (core->assignment[k].kind == 0) {
+    if (!inPlantingColumn(core, wx, wy)) {
+      core->counters.out_of_column++;
+      return 0;
+    }
+    int32_t evicted[NAV_MAX_TREES];
+    int32_t num_evicted = 0;
+    tree_id = navTreesAdd(&core->memory, wx, wy, t_ms, det->u, det->v, pose_now->x, pose_now->y, core->protected_ids,
+                          *num_protected, evicted, &num_evicted);
+    for (int32_t e = 0; e < num_evicted; e++) {
+      pushEvent(core, NAV_EVENT_TREE_EVICTED, t_ms, evicted[e], 0.0, 0.0);
+      if (evicted[e] == core->target_id) {
+        dropTarget(core);
+      }
+    }
+    if (tree_id == 0) {
+      return 0; /* T_d full of trees seen in this very frame: counted in memory.unstored */
+    }
+    core->protected_ids[(*num_protected)++] = tree_id; /* a later new tree of this frame must not evict it */
+    pushEvent(core, NAV_EVENT_TREE_ADDED, t_ms, tree_id, wx, wy);
+  } else {
+    navTreesUpdate(&core->memory, tree_id, wx, wy, t_ms, det->u, det->v);
+  }
+  if (tree_id == core->target_id) {
+    measureTarget(core, t_ms, det, capture, pose_now);
+  }
+  return tree_id;
+}
+
 int32_t navCoreOnFrame(NavCore* core, int32_t t_ms, const NavDetection* detections, int32_t count,
                        const NavPose* pose_now) {
   const NavParams* p = &core->params;
@@ -317,41 +394,22 @@ int32_t navCoreOnFrame(NavCore* core, int32_t t_ms, const NavDetection* detectio
                  &core->last_frame_points[i][1]);
   }
   core->num_last_frame_points = count;
-  NavAssociation assignment[NAV_MAX_FRAME_DETECTIONS];
-  navTreesAssociate(&core->memory, (const double (*)[2])core->last_frame_points, count, p->merge_radius_m,
-                    assignment);
+  const int32_t kept = mergeDuplicates(core, detections, count, p->duplicate_radius_m);
+  core->counters.duplicates += (uint32_t)(count - kept);
+  navTreesAssociate(&core->memory, (const double (*)[2])core->merged_points, kept, p->merge_radius_m,
+                    core->assignment);
+  int32_t num_protected = 0;
+  for (int32_t k = 0; k < kept; k++) {
+    if (core->assignment[k].kind == 1) {
+      core->protected_ids[num_protected++] = core->assignment[k].id;
+    }
+  }
+  for (int32_t k = 0; k < kept; k++) {
+    core->merged_ids[k] = takeDetection(core, t_ms, k, &num_protected, &capture, pose_now);
+  }
+  core->counters.detections += (uint32_t)count;
   for (int32_t i = 0; i < count; i++) {
-    const double wx = core->last_frame_points[i][0], wy = core->last_frame_points[i][1];
-    int32_t tree_id = assignment[i].id;
-    core->counters.detections++;
-    core->last_frame_ids[i] = tree_id;
-    if (assignment[i].kind == 2) {
-      core->counters.on_visited++;
-      continue;
-    }
-    if (assignment[i].kind == 0) {
-      if (!inPlantingColumn(core, wx, wy)) {
-        core->counters.out_of_column++;
-        continue;
-      }
-      int32_t evicted[NAV_MAX_TREES];
-      int32_t num_evicted = 0;
-      tree_id = navTreesAdd(&core->memory, wx, wy, t_ms, detections[i].u, detections[i].v, pose_now->x,
-                            pose_now->y, evicted, &num_evicted);
-      core->last_frame_ids[i] = tree_id;
-      pushEvent(core, NAV_EVENT_TREE_ADDED, t_ms, tree_id, wx, wy);
-      for (int32_t k = 0; k < num_evicted; k++) {
-        pushEvent(core, NAV_EVENT_TREE_EVICTED, t_ms, evicted[k], 0.0, 0.0);
-        if (evicted[k] == core->target_id) {
-          dropTarget(core);
-        }
-      }
-    } else {
-      navTreesUpdate(&core->memory, tree_id, wx, wy, t_ms, detections[i].u, detections[i].v);
-    }
-    if (tree_id == core->target_id) {
-      measureTarget(core, t_ms, &detections[i], &capture, pose_now);
-    }
+    core->last_frame_ids[i] = core->merged_ids[core->owner[i]];
   }
   return count;
 }
@@ -430,30 +488,44 @@ static NavCommand stepTakeoff(NavCore* core, int32_t t_ms, const NavPose* pose) 
 
 /* -- recovery ------------------------------------------------------------------------------------------- */
 
-static NavCommand abandonTarget(NavCore* core, int32_t t_ms, const NavPose* pose, const NavTree* tree) {
+static NavCommand afterTree(NavCore* core, int32_t t_ms, const NavPose* pose);
+
+/* Give the target up. unseen: recovery timed out without seeing it again (hidden); such a tree is flagged for
+ * one more try before landing, unless this already was that try. */
+static NavCommand abandonTarget(NavCore* core, int32_t t_ms, const NavPose* pose, const NavTree* tree, bool unseen) {
   if (tree != NULL) {
     const int32_t id = tree->id;
     const double x = tree->x, y = tree->y;
-    navTreesMarkVisited(&core->memory, id, t_ms, pose->x, pose->y, false);
+    const bool revisit = unseen && !core->revisiting;
+    navTreesMarkVisited(&core->memory, id, t_ms, pose->x, pose->y, false, revisit);
     core->counters.abandoned++;
-    pushEvent(core, NAV_EVENT_ABANDONED, t_ms, id, x, y);
+    NavEvent* e = pushEvent(core, NAV_EVENT_ABANDONED, t_ms, id, x, y);
+    if (e != NULL) {
+      e->variant = revisit ? 1 : 0;
+    }
   }
   dropTarget(core);
-  enterPhase(core, NAV_PHASE_RETURN_TO_PATH, t_ms);
-  return hover(core, 0.0, 0.0);
+  return afterTree(core, t_ms, pose);
 }
 
 static NavCommand stepRecovery(NavCore* core, int32_t t_ms, const NavPose* pose) {
   const NavParams* p = &core->params;
   const NavTree* tree = navCoreTarget(core);
-  if (tree == NULL || t_ms - core->recovery_since > p->recovery_timeout_ms ||
-      t_ms - core->target_since > p->target_timeout_ms) {
-    return abandonTarget(core, t_ms, pose, tree);
-  }
   double cx, cy;
   cameraGroundPoint(core, pose, &cx, &cy);
-  const double ex = tree->x - cx, ey = tree->y - cy;
+  const double ex = tree != NULL ? tree->x - cx : 0.0, ey = tree != NULL ? tree->y - cy : 0.0;
   const double distance = hypot(ex, ey);
+  if (core->revisiting && !core->revisit_arrived && tree != NULL) {
+    /* going back: the recovery and target clocks start once the MAV is over s_t */
+    core->revisit_arrived = distance <= p->return_tolerance_m;
+    core->recovery_since = core->target_since = t_ms;
+  }
+  if (tree == NULL || t_ms - core->target_since > p->target_timeout_ms) {
+    return abandonTarget(core, t_ms, pose, tree, false);
+  }
+  if (t_ms - core->recovery_since > p->recovery_timeout_ms) {
+    return abandonTarget(core, t_ms, pose, tree, true);
+  }
   const double speed = mind(p->recovery_speed, p->servo_gain * distance);
   if (distance < 1e-9) {
     return hover(core, 0.0, 0.0);
@@ -476,6 +548,59 @@ static void beginRecovery(NavCore* core, int32_t t_ms, const NavTree* tree, doub
     e->n = t_ms - tree->last_ms;
   }
   enterPhase(core, NAV_PHASE_RECOVERY, t_ms);
+}
+
+/* Go back once for the nearest tree abandoned while hidden (flagged in the visited list): restore it into
+ * T_d as the target and fly to s_t by memory. False if there is none. */
+static bool startRevisit(NavCore* core, int32_t t_ms, const NavPose* pose) {
+  const NavParams* p = &core->params;
+  double cx, cy;
+  cameraGroundPoint(core, pose, &cx, &cy);
+  const NavVisited* best = NULL;
+  double best_d = 0.0;
+  for (int32_t i = 0; i < core->memory.num_visited; i++) {
+    const NavVisited* e = &core->memory.visited[i];
+    if (!e->revisit) {
+      continue;
+    }
+    const double d = hypot(e->x - cx, e->y - cy);
+    if (best == NULL || d < best_d || (d == best_d && e->id < best->id)) {
+      best = e;
+      best_d = d;
+    }
+  }
+  if (best == NULL) {
+    return false;
+  }
+  int32_t evicted[NAV_MAX_TREES];
+  int32_t num_evicted = 0;
+  const NavTree* tree = navTreesRestore(&core->memory, best->id, p->min_hits, (double)p->cam_width_px / 2.0,
+                                        (double)p->cam_height_px / 2.0, pose->x, pose->y, evicted, &num_evicted);
+  for (int32_t k = 0; k < num_evicted; k++) {
+    pushEvent(core, NAV_EVENT_TREE_EVICTED, t_ms, evicted[k], 0.0, 0.0);
+  }
+  core->revisiting = true;
+  core->revisit_arrived = false;
+  core->target_id = tree->id;
+  core->target_since = t_ms;
+  pushEvent(core, NAV_EVENT_REVISIT, t_ms, tree->id, tree->x, tree->y);
+  beginRecovery(core, t_ms, tree, 0.0, false);
+  return true;
+}
+
+/* A target is done (reached, abandoned or evicted): back to the path, or, while going back for abandoned trees
+ * after the last waypoint, on to the next one or to landing. */
+static NavCommand afterTree(NavCore* core, int32_t t_ms, const NavPose* pose) {
+  if (!core->revisiting) {
+    enterPhase(core, NAV_PHASE_RETURN_TO_PATH, t_ms);
+    return hover(core, 0.0, 0.0);
+  }
+  core->revisiting = false;
+  if (startRevisit(core, t_ms, pose)) {
+    return hover(core, 0.0, 0.0);
+  }
+  enterPhase(core, NAV_PHASE_LAND, t_ms);
+  return stepLand(core, t_ms);
 }
 
 /* -- visual approach ------------------------------------------------------------------------------------ */
@@ -518,7 +643,7 @@ static NavCommand reached(NavCore* core, int32_t t_ms, const NavPose* pose, cons
   cameraGroundPoint(core, pose, &cx, &cy);
   const int32_t id = tree->id;
   const double tx = tree->x, ty = tree->y;
-  navTreesMarkVisited(&core->memory, id, t_ms, pose->x, pose->y, true);
+  navTreesMarkVisited(&core->memory, id, t_ms, pose->x, pose->y, true, false);
   core->counters.reached++;
   NavEvent* e = pushEvent(core, NAV_EVENT_TREE_REACHED, t_ms, id, cx, cy);
   if (e != NULL) {
@@ -526,8 +651,7 @@ static NavCommand reached(NavCore* core, int32_t t_ms, const NavPose* pose, cons
     e->b = ty;
   }
   dropTarget(core);
-  enterPhase(core, NAV_PHASE_RETURN_TO_PATH, t_ms);
-  return hover(core, 0.0, 0.0);
+  return afterTree(core, t_ms, pose);
 }
 
 static NavCommand stepApproach(NavCore* core, int32_t t_ms, const NavPose* pose) {
@@ -535,11 +659,10 @@ static NavCommand stepApproach(NavCore* core, int32_t t_ms, const NavPose* pose)
   const NavTree* tree = navCoreTarget(core);
   if (tree == NULL) { /* evicted meanwhile: nothing left to approach */
     dropTarget(core);
-    enterPhase(core, NAV_PHASE_RETURN_TO_PATH, t_ms);
-    return hover(core, 0.0, 0.0);
+    return afterTree(core, t_ms, pose);
   }
   if (t_ms - core->target_since > p->target_timeout_ms) {
-    return abandonTarget(core, t_ms, pose, tree);
+    return abandonTarget(core, t_ms, pose, tree, false);
   }
   predictFilter(core, t_ms);
   double cx, cy;
@@ -679,6 +802,9 @@ static NavCommand stepFollow(NavCore* core, int32_t t_ms, const NavPose* pose) {
       e->n = core->waypoint_index - 1;
     }
     if (core->waypoint_index >= core->path_length) {
+      if (startRevisit(core, t_ms, pose)) {
+        return stepRecovery(core, t_ms, pose);
+      }
       enterPhase(core, NAV_PHASE_LAND, t_ms);
       return stepLand(core, t_ms);
     }
@@ -701,6 +827,17 @@ NavCommand navCoreStep(NavCore* core, int32_t t_ms, const NavPose* pose) {
   recordPose(core, t_ms, pose);
   core->memory.capacity = core->params.tree_capacity; /* PARAMs may change in flight */
   core->memory.visited_capacity = core->params.visited_capacity;
+  int32_t evicted[NAV_MAX_TREES];
+  const int32_t num_evicted = navTreesEvictToCapacity(&core->memory, pose->x, pose->y, evicted);
+  for (int32_t k = 0; k < num_evicted; k++) {
+    NavEvent* e = pushEvent(core, NAV_EVENT_TREE_EVICTED, t_ms, evicted[k], 0.0, 0.0);
+    if (e != NULL) {
+      e->variant = 1; /* treeCapacity lowered */
+    }
+    if (evicted[k] == core->target_id) {
+      dropTarget(core);
+    }
+  }
   NavCommand command;
   if (watchLink(core, t_ms, &command)) {
     core->has_last_tick = true;
@@ -724,7 +861,7 @@ NavCommand navCoreStep(NavCore* core, int32_t t_ms, const NavPose* pose) {
     case NAV_PHASE_LAND:
       command = stepLand(core, t_ms);
       break;
-    default: /* BOOT, DONE, NO_DECK */
+    default: /* BOOT, DONE, NO_DECK, NO_CAMERA */
       command = nullCommand();
       break;
   }
@@ -827,7 +964,13 @@ int navFormatEventDetail(const NavEvent* e, char* out, size_t size) {
       n = append(out, size, n, navPhaseName(e->n));
       break;
     case NAV_EVENT_TREE_EVICTED:
-      n = append(out, size, n, "T_d full");
+      n = append(out, size, n, e->variant ? "treeCapacity lowered" : "T_d full");
+      break;
+    case NAV_EVENT_ABANDONED:
+      n = append(out, size, n, e->variant ? "unseen: will go back once" : "");
+      break;
+    case NAV_EVENT_REVISIT:
+      n = append(out, size, n, "abandoned while hidden");
       break;
     case NAV_EVENT_TREE_REACHED:
       n = append(out, size, n, "s_t ");
@@ -886,7 +1029,8 @@ int navFormatEvent(const NavEvent* e, char* out, size_t size) {
   }
   const bool positioned = e->kind == NAV_EVENT_TREE_ADDED || e->kind == NAV_EVENT_TREE_REACHED ||
                           e->kind == NAV_EVENT_TARGET_SELECTED || e->kind == NAV_EVENT_RECOVERY ||
-                          e->kind == NAV_EVENT_ABANDONED || e->kind == NAV_EVENT_APPROACH_BY_MEMORY;
+                          e->kind == NAV_EVENT_ABANDONED || e->kind == NAV_EVENT_APPROACH_BY_MEMORY ||
+                          e->kind == NAV_EVENT_REVISIT;
   if (positioned) {
     n = append(out, size, n, " at (");
     n = appendFixed(out, size, n, e->x, 3);

@@ -23,7 +23,7 @@
 #define NAV_MAX_WAYPOINTS 64
 #define NAV_MAX_TREES 64
 #define NAV_MAX_VISITED 128
-#define NAV_MAX_FRAME_DETECTIONS 32
+#define NAV_MAX_FRAME_DETECTIONS 64 /* app.frameCap (default 64) is clamped to it */
 #define NAV_MAX_EVENTS 96
 #define NAV_POSE_HISTORY 128 /* ticks of pose history for latency compensation (~1.3 s at 100 Hz) */
 #define NAV_POSITION_AVERAGE_WINDOW 20
@@ -40,6 +40,7 @@ typedef enum {
   NAV_PHASE_LAND,
   NAV_PHASE_DONE,
   NAV_PHASE_NO_DECK,
+  NAV_PHASE_NO_CAMERA,
 } NavPhase;
 
 typedef enum {
@@ -55,6 +56,7 @@ typedef enum {
   NAV_EVENT_WAYPOINT,
   NAV_EVENT_LINK_LOST,
   NAV_EVENT_LINK_RESTORED,
+  NAV_EVENT_REVISIT,
   NAV_EVENT_KIND_COUNT,
 } NavEventKind;
 
@@ -89,6 +91,7 @@ typedef struct {
   double recovery_speed;
   double return_tolerance_m;
   double merge_radius_m;
+  double duplicate_radius_m;
   double crown_size_m;
   double column_factor;
   int32_t min_hits;
@@ -104,6 +107,8 @@ typedef struct {
   double kf_accel_psd;
   int32_t link_hold_ms;
   int32_t link_land_ms;
+  int32_t camera_wait_ms; /* used by the adapters (pre-flight camera check) */
+  int32_t frame_capacity; /* used by the camera input */
 } NavParams;
 
 typedef struct { double x, y, z, yaw_deg, vx, vy; } NavPose; /* the estimate: m, m, m, deg, m/s, m/s */
@@ -119,11 +124,11 @@ typedef struct {
   double x, y;
   double a, b;     /* s_t (reached), e_d (recovery), silence in s (link events) */
   int32_t n;       /* phase entered, waypoint index, ms not seen */
-  int32_t variant; /* recovery: 1 e_d, 0 not seen; link_lost: 1 landing, 0 holding */
+  int32_t variant; /* recovery: 1 e_d, 0 not seen; link_lost: 1 landing, 0 holding; abandoned: 1 revisit */
 } NavEvent;
 
 typedef struct {
-  uint32_t detections, out_of_column, on_visited, reached, recoveries, abandoned, link_losses;
+  uint32_t detections, out_of_column, on_visited, reached, recoveries, abandoned, link_losses, duplicates;
 } NavCounters;
 
 /* pixel_kalman.PixelKalmanFilter: x = [u, v, du, dv] (px, px/s), P the full 4x4 covariance. */
@@ -136,7 +141,8 @@ typedef struct {
 } NavKalman;
 
 typedef struct { int32_t id; double x, y; int32_t hits, first_ms, last_ms; double u, v; } NavTree;
-typedef struct { int32_t id; double x, y; int32_t t_ms; bool reached; } NavVisited;
+/* revisit: abandoned while unseen (hidden): the app goes back for it once before landing */
+typedef struct { int32_t id; double x, y; int32_t t_ms; bool reached; bool revisit; } NavVisited;
 
 /* tree_memory.TreeMemory: T_d (insertion order) and the visited list (oldest first). */
 typedef struct {
@@ -146,6 +152,7 @@ typedef struct {
   NavVisited visited[NAV_MAX_VISITED];
   int32_t num_visited;
   uint32_t evicted, visited_forgotten;
+  uint32_t unstored; /* new trees not stored: T_d full of trees seen in the same frame */
   int32_t next_id;
 } NavTreeMemory;
 
@@ -210,6 +217,16 @@ typedef struct {
   int32_t last_frame_ms;
   bool link_lost;
   bool link_aborted;
+  bool revisiting;      /* flying back, before landing, to a tree abandoned while hidden */
+  bool revisit_arrived; /* ... and over its stored s_t once */
+  /* per-frame scratch (kept here, not on the camera task's stack) */
+  NavDetection merged[NAV_MAX_FRAME_DETECTIONS];
+  double merged_points[NAV_MAX_FRAME_DETECTIONS][2];
+  int32_t merged_counts[NAV_MAX_FRAME_DETECTIONS];
+  int32_t owner[NAV_MAX_FRAME_DETECTIONS];
+  int32_t merged_ids[NAV_MAX_FRAME_DETECTIONS];
+  NavAssociation assignment[NAV_MAX_FRAME_DETECTIONS];
+  int32_t protected_ids[NAV_MAX_FRAME_DETECTIONS];
 } NavCore;
 
 /* The camera input of the app (NavigationApp.camera_task / on_camera_line / _end_frame): one per app. */
@@ -217,8 +234,10 @@ typedef struct {
   NavLineAssembler assembler;
   NavDetection frame[NAV_MAX_FRAME_DETECTIONS];
   int32_t frame_length;
-  uint32_t frames_truncated;
   bool marks_seen;
+  bool heard;             /* a valid camera message (frame mark or detection) was received ... */
+  int32_t last_heard_ms;  /* ... last at this tick */
+  uint32_t frame_overflow; /* detections dropped beyond app.frameCap in one frame */
   char target_label[NAV_LABEL_LENGTH]; /* "" = accept every N2 label */
   uint32_t other_labels;
   uint32_t frames;
@@ -237,6 +256,7 @@ double navFocalPx(const NavParams* params);
 bool navCoreInit(NavCore* core, const NavParams* params, const double* xy, int32_t waypoints);
 void navCoreStart(NavCore* core, int32_t t_ms);
 void navCoreAbortNoDeck(NavCore* core, int32_t t_ms);
+void navCoreAbortNoCamera(NavCore* core, int32_t t_ms); /* camera never heard before take-off */
 NavCommand navCoreStep(NavCore* core, int32_t t_ms, const NavPose* pose);
 void navCoreOnFrameMark(NavCore* core, int32_t t_ms);
 /* Returns the number of detections taken (<= NAV_MAX_FRAME_DETECTIONS); ids in core->last_frame_ids. */
@@ -265,12 +285,20 @@ void navTreesInit(NavTreeMemory* memory, int32_t capacity, int32_t visited_capac
 NavTree* navTreesGet(NavTreeMemory* memory, int32_t id);
 void navTreesAssociate(const NavTreeMemory* memory, const double (*points)[2], int32_t count,
                        double merge_radius, NavAssociation* result);
-/* Returns the new id; evicted ids go to evicted[] (at most NAV_MAX_TREES), their count to *num_evicted. */
+/* Returns the new id, or 0 when T_d is full of protected trees (ids a detection of this frame refers to;
+ * counted in unstored); evicted ids go to evicted[] (at most NAV_MAX_TREES), their count to *num_evicted. */
 int32_t navTreesAdd(NavTreeMemory* memory, double x, double y, int32_t t_ms, double u, double v,
-                    double mav_x, double mav_y, int32_t* evicted, int32_t* num_evicted);
+                    double mav_x, double mav_y, const int32_t* protected_ids, int32_t num_protected,
+                    int32_t* evicted, int32_t* num_evicted);
+/* After capacity was lowered: evict the farthest trees until T_d fits. Returns how many (ids in evicted). */
+int32_t navTreesEvictToCapacity(NavTreeMemory* memory, double mav_x, double mav_y, int32_t* evicted);
+/* Move a visited entry back into T_d (same id and position, hits, last seen when visited, image (u, v));
+ * a full T_d evicts its farthest tree first. NULL if id is not visited. */
+NavTree* navTreesRestore(NavTreeMemory* memory, int32_t id, int32_t hits, double u, double v, double mav_x,
+                         double mav_y, int32_t* evicted, int32_t* num_evicted);
 void navTreesUpdate(NavTreeMemory* memory, int32_t id, double x, double y, int32_t t_ms, double u, double v);
 bool navTreesMarkVisited(NavTreeMemory* memory, int32_t id, int32_t t_ms, double mav_x, double mav_y,
-                         bool reached);
+                         bool reached, bool revisit);
 
 /* -- nav_serial.c -- */
 void navLineAssemblerInit(NavLineAssembler* assembler);
@@ -293,6 +321,8 @@ size_t navCameraInputFeed(NavCameraInput* input, NavCore* core, const uint8_t* d
  * Returns true when a frame was handed over. */
 bool navCameraInputEndBatch(NavCameraInput* input, NavCore* core, int32_t t_ms, const NavPose* pose_now,
                             bool pose_valid);
+/* Pre-flight check: a valid camera message within app.linkHoldMs (app.camWaitMs 0: no check). */
+bool navCameraInputAlive(const NavCameraInput* input, const NavParams* params, int32_t t_ms);
 
 #ifdef __cplusplus
 }

@@ -17,8 +17,9 @@ typedef struct {
 typedef struct {
   int32_t phase, target_id, waypoint_index, num_trees, num_visited;
   int32_t captured, link_lost, link_aborted, has_target;
-  uint32_t detections, out_of_column, on_visited, reached, recoveries, abandoned, link_losses;
-  uint32_t evicted, forgotten, lines_dropped, other_labels, frames, frames_truncated, events_dropped;
+  uint32_t detections, out_of_column, on_visited, reached, recoveries, abandoned, link_losses, duplicates;
+  uint32_t evicted, forgotten, lines_dropped, other_labels, frames, frame_overflow, events_dropped, unstored;
+  int32_t pending_detections, revisiting;
   double err_u, err_v, target_x, target_y;
 } NavHostStatus;
 
@@ -44,6 +45,12 @@ void navHostDefaults(NavParams* params) { navParamsDefaults(params); }
 void navHostStart(NavHostApp* app, int32_t t_ms) { navCoreStart(&app->core, t_ms); }
 
 void navHostAbortNoDeck(NavHostApp* app, int32_t t_ms) { navCoreAbortNoDeck(&app->core, t_ms); }
+
+void navHostAbortNoCamera(NavHostApp* app, int32_t t_ms) { navCoreAbortNoCamera(&app->core, t_ms); }
+
+int32_t navHostCameraAlive(const NavHostApp* app, int32_t t_ms) {
+  return navCameraInputAlive(&app->input, &app->core.params, t_ms) ? 1 : 0;
+}
 
 static NavPose pose6(const double* pose) {
   NavPose p = {pose[0], pose[1], pose[2], pose[3], pose[4], pose[5]};
@@ -133,7 +140,11 @@ void navHostStatus(const NavHostApp* app, NavHostStatus* s) {
   s->lines_dropped = app->input.assembler.dropped;
   s->other_labels = app->input.other_labels;
   s->frames = app->input.frames;
-  s->frames_truncated = app->input.frames_truncated;
+  s->frame_overflow = app->input.frame_overflow;
+  s->duplicates = c->counters.duplicates;
+  s->unstored = c->memory.unstored;
+  s->pending_detections = app->input.frame_length;
+  s->revisiting = c->revisiting;
   s->events_dropped = c->events_dropped;
   s->err_u = c->pixel_error[0];
   s->err_v = c->pixel_error[1];
@@ -157,16 +168,17 @@ int32_t navHostTrees(const NavHostApp* app, double* out, int32_t max_rows) {
   return n;
 }
 
-/* Visited list: (id, x, y, t_ms, reached) rows; returns their number. */
+/* Visited list: (id, x, y, t_ms, reached, revisit) rows (5 + 1 doubles each); returns their number. */
 int32_t navHostVisited(const NavHostApp* app, double* out, int32_t max_rows) {
   const NavTreeMemory* m = &app->core.memory;
   const int32_t n = m->num_visited < max_rows ? m->num_visited : max_rows;
   for (int32_t i = 0; i < n; i++) {
-    out[5 * i] = m->visited[i].id;
-    out[5 * i + 1] = m->visited[i].x;
-    out[5 * i + 2] = m->visited[i].y;
-    out[5 * i + 3] = m->visited[i].t_ms;
-    out[5 * i + 4] = m->visited[i].reached;
+    out[6 * i] = m->visited[i].id;
+    out[6 * i + 1] = m->visited[i].x;
+    out[6 * i + 2] = m->visited[i].y;
+    out[6 * i + 3] = m->visited[i].t_ms;
+    out[6 * i + 4] = m->visited[i].reached;
+    out[6 * i + 5] = m->visited[i].revisit;
   }
   return n;
 }

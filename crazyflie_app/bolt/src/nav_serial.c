@@ -274,7 +274,8 @@ void navCameraInputInit(NavCameraInput* input, const char* target_label) {
 }
 
 static bool endFrame(NavCameraInput* input, NavCore* core, int32_t t_ms, const NavPose* pose_now, bool pose_valid) {
-  if (input->frame_length == 0 || core->phase == NAV_PHASE_DONE || !pose_valid) {
+  if (input->frame_length == 0 || core->phase == NAV_PHASE_DONE || core->phase == NAV_PHASE_NO_CAMERA ||
+      !pose_valid) {
     input->frame_length = 0;
     return false;
   }
@@ -289,6 +290,10 @@ static bool endFrame(NavCameraInput* input, NavCore* core, int32_t t_ms, const N
 static bool onLine(NavCameraInput* input, NavCore* core, const char* line, int32_t length, int32_t t_ms,
                    const NavPose* pose_now, bool pose_valid) {
   const NavMessage m = navParseLine(line, length);
+  if (m.kind != NAV_LINE_NONE) {
+    input->heard = true;
+    input->last_heard_ms = t_ms;
+  }
   if (m.kind == NAV_LINE_MARK_START || m.kind == NAV_LINE_MARK_STOP) {
     input->marks_seen = true;
     navCoreOnFrameMark(core, t_ms);
@@ -299,8 +304,10 @@ static bool onLine(NavCameraInput* input, NavCore* core, const char* line, int32
       input->other_labels++;
       return false;
     }
-    if (input->frame_length >= NAV_MAX_FRAME_DETECTIONS) {
-      input->frames_truncated++;
+    const int32_t capacity = core->params.frame_capacity < NAV_MAX_FRAME_DETECTIONS ? core->params.frame_capacity
+                                                                                       : NAV_MAX_FRAME_DETECTIONS;
+    if (input->frame_length >= capacity) {
+      input->frame_overflow++; /* T2 lines without MARK STOP must not pile up without limit */
       return false;
     }
     NavDetection* d = &input->frame[input->frame_length++];
@@ -331,4 +338,11 @@ bool navCameraInputEndBatch(NavCameraInput* input, NavCore* core, int32_t t_ms, 
     return endFrame(input, core, t_ms, pose_now, pose_valid);
   }
   return false;
+}
+
+bool navCameraInputAlive(const NavCameraInput* input, const NavParams* params, int32_t t_ms) {
+  if (params->camera_wait_ms <= 0) {
+    return true;
+  }
+  return input->heard && t_ms - input->last_heard_ms <= params->link_hold_ms;
 }

@@ -2,7 +2,9 @@
  * The detected-tree memory T_d and the visited list (the port of tree_memory.py), bounded, keyed by
  * stable ids (never by array position: removing one tree cannot retarget another).
  *
- * A new tree when T_d is full evicts the stored tree farthest from the MAV (counted in evicted); a full
+ * A new tree when T_d is full evicts the stored tree farthest from the MAV (counted in evicted), except the
+ * trees a detection of the same frame refers to (protected); when all are, the new tree is not stored
+ * (counted in unstored). A full
  * visited list forgets its entry farthest from the MAV (counted in visited_forgotten). Association is
  * nearest-neighbour with exclusivity per frame: each detection goes to the nearest stored or visited tree
  * within the merge radius, no two detections of one frame to the same tree. It is done greedily on the
@@ -123,12 +125,44 @@ static void removeTreeAt(NavTreeMemory* memory, int32_t index) {
   memory->num_trees--;
 }
 
+static bool isProtected(int32_t id, const int32_t* protected_ids, int32_t num_protected) {
+  for (int32_t k = 0; k < num_protected; k++) {
+    if (protected_ids[k] == id) {
+      return true;
+    }
+  }
+  return false;
+}
+
+/* Index of the unprotected tree farthest from the MAV (ties: smaller id), -1 if every tree is protected. */
+static int32_t farthestUnprotected(const NavTreeMemory* memory, double mx, double my, const int32_t* protected_ids,
+                                   int32_t num_protected) {
+  int32_t best = -1;
+  double best_d = 0.0;
+  for (int32_t i = 0; i < memory->num_trees; i++) {
+    if (isProtected(memory->trees[i].id, protected_ids, num_protected)) {
+      continue;
+    }
+    const double d = hypot(memory->trees[i].x - mx, memory->trees[i].y - my);
+    if (best < 0 || d > best_d || (d == best_d && memory->trees[i].id < memory->trees[best].id)) {
+      best = i;
+      best_d = d;
+    }
+  }
+  return best;
+}
+
 int32_t navTreesAdd(NavTreeMemory* memory, double x, double y, int32_t t_ms, double u, double v,
-                    double mav_x, double mav_y, int32_t* evicted, int32_t* num_evicted) {
+                    double mav_x, double mav_y, const int32_t* protected_ids, int32_t num_protected,
+                    int32_t* evicted, int32_t* num_evicted) {
   const int32_t capacity = clampCapacity(memory->capacity, NAV_MAX_TREES);
   *num_evicted = 0;
   while (memory->num_trees >= capacity) {
-    const int32_t index = farthestTree(memory, mav_x, mav_y);
+    const int32_t index = farthestUnprotected(memory, mav_x, mav_y, protected_ids, num_protected);
+    if (index < 0) {
+      memory->unstored++;
+      return 0;
+    }
     evicted[(*num_evicted)++] = memory->trees[index].id;
     removeTreeAt(memory, index);
     memory->evicted++;
@@ -143,6 +177,50 @@ int32_t navTreesAdd(NavTreeMemory* memory, double x, double y, int32_t t_ms, dou
   tree->u = u;
   tree->v = v;
   return tree->id;
+}
+
+int32_t navTreesEvictToCapacity(NavTreeMemory* memory, double mav_x, double mav_y, int32_t* evicted) {
+  const int32_t capacity = clampCapacity(memory->capacity, NAV_MAX_TREES);
+  int32_t n = 0;
+  while (memory->num_trees > capacity) {
+    const int32_t index = farthestTree(memory, mav_x, mav_y);
+    evicted[n++] = memory->trees[index].id;
+    removeTreeAt(memory, index);
+    memory->evicted++;
+  }
+  return n;
+}
+
+NavTree* navTreesRestore(NavTreeMemory* memory, int32_t id, int32_t hits, double u, double v, double mav_x,
+                         double mav_y, int32_t* evicted, int32_t* num_evicted) {
+  *num_evicted = 0;
+  int32_t k = 0;
+  while (k < memory->num_visited && memory->visited[k].id != id) {
+    k++;
+  }
+  if (k == memory->num_visited) {
+    return NULL;
+  }
+  const NavVisited entry = memory->visited[k];
+  memmove(&memory->visited[k], &memory->visited[k + 1], (size_t)(memory->num_visited - k - 1) * sizeof(NavVisited));
+  memory->num_visited--;
+  const int32_t capacity = clampCapacity(memory->capacity, NAV_MAX_TREES);
+  while (memory->num_trees >= capacity) {
+    const int32_t index = farthestTree(memory, mav_x, mav_y);
+    evicted[(*num_evicted)++] = memory->trees[index].id;
+    removeTreeAt(memory, index);
+    memory->evicted++;
+  }
+  NavTree* tree = &memory->trees[memory->num_trees++];
+  tree->id = entry.id;
+  tree->x = entry.x;
+  tree->y = entry.y;
+  tree->hits = hits;
+  tree->first_ms = entry.t_ms;
+  tree->last_ms = entry.t_ms;
+  tree->u = u;
+  tree->v = v;
+  return tree;
 }
 
 void navTreesUpdate(NavTreeMemory* memory, int32_t id, double x, double y, int32_t t_ms, double u, double v) {
@@ -161,7 +239,7 @@ void navTreesUpdate(NavTreeMemory* memory, int32_t id, double x, double y, int32
 }
 
 bool navTreesMarkVisited(NavTreeMemory* memory, int32_t id, int32_t t_ms, double mav_x, double mav_y,
-                         bool reached) {
+                         bool reached, bool revisit) {
   NavTree* t = navTreesGet(memory, id);
   if (t == NULL) {
     return false;
@@ -182,5 +260,6 @@ bool navTreesMarkVisited(NavTreeMemory* memory, int32_t id, int32_t t_ms, double
   entry->y = tree.y;
   entry->t_ms = t_ms;
   entry->reached = reached;
+  entry->revisit = revisit;
   return true;
 }
