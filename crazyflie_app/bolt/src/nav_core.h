@@ -24,8 +24,11 @@
 #define NAV_MAX_TREES 64
 #define NAV_MAX_VISITED 128
 #define NAV_MAX_FRAME_DETECTIONS 64 /* app.frameCap (default 64) is clamped to it */
-#define NAV_MAX_EVENTS 96
-#define NAV_POSE_HISTORY 128 /* ticks of pose history for latency compensation (~1.3 s at 100 Hz) */
+#define NAV_MAX_EVENTS 64 /* drained every tick; a frame of 64 new trees would overflow it (counted) */
+/* Ticks of pose history for latency compensation: 470 ms at 100 Hz. The Python core keeps 128 (1.3 s); the
+ * lookup (newest pose not later than t - camLatency) gives the same pose whenever camLatency < 470 ms, and
+ * the Bolt's RAM is short (98 % used with 128). */
+#define NAV_POSE_HISTORY 48
 #define NAV_POSITION_AVERAGE_WINDOW 20
 #define NAV_MAX_LINE_LENGTH 64 /* longest valid serial message (foranav_serial.MAX_LINE_LENGTH) */
 #define NAV_LABEL_LENGTH (NAV_MAX_LINE_LENGTH + 1)
