@@ -5,24 +5,25 @@ twice in one frame is one tree."""
 import json
 import subprocess
 import sys
-from dataclasses import replace
+from pathlib import Path
 
 import pytest
 
 from crazyflie_app.firmware import COMMANDER_PRIORITY_DISABLE, Crazyflie, v_task_delay
 from crazyflie_app.navigation import BOOT_DELAY_MS, PRE_TAKEOFF_DELAY_MS, NavigationApp
-from crazyflie_app.navigation_core import (PHASE_APPROACH, PHASE_FOLLOW_PATH, PHASE_LAND, PHASE_NO_CAMERA,
+from crazyflie_app.navigation_core import (PHASE_FOLLOW_PATH, PHASE_LAND, PHASE_NO_CAMERA,
                                            PHASE_RECOVERY, PHASE_TAKEOFF, Detection, NavigationCore,
                                            NavigationParams, Pose, merge_duplicates)
 from crazyflie_app.tree_memory import TreeMemory
 from host_tools.flight import camera_factory, run_flight
-from host_tools.maps import Tree, load_map, map_to_dict
+from host_tools.maps import load_map
 from jevois_module.ForaNavTrees import foranav_serial as fs
 
 PATH = ((0.0, 0.0), (3.0, 0.0))
 BOOTED_MS = BOOT_DELAY_MS + 10
 AIRBORNE_M = 0.1  # above this the MAV has left the ground
 FRAME_MS = 111
+FAULT_MAPS = Path(__file__).resolve().parent / "fixtures" / "faults"  # maps of docs/faults.md
 
 
 def make_app(**params):
@@ -151,24 +152,15 @@ def test_that_eviction_spares_the_trees_of_the_same_frame():
     assert sut.unstored == 1 and set(sut.trees) == {far, new}
 
 
-def _flight_map(tmp_path, name, pmap):
-    path = tmp_path / ("%s.json" % name)
-    path.write_text(json.dumps(map_to_dict(pmap)))
-    return load_map(str(path))
-
-
-def test_that_a_dense_plantation_with_the_oracle_never_crashes(tmp_path):
-    base = load_map("map1")
+def test_that_a_dense_plantation_with_the_oracle_never_crashes():
     # a grid of small palms every 0.15 m over the columns: ~60 in view at once, T_d holds 32 (KeyError before)
-    grid = [(0.3 + 0.15 * i, -0.6 + 0.15 * j) for i in range(25) for j in range(9)]
-    trees = tuple(Tree(k + 1, round(x, 3), round(y, 3), "oil_palm", 0.14, True) for k, (x, y) in enumerate(grid))
-    pmap = _flight_map(tmp_path, "dense", replace(base, trees=trees))
+    pmap = load_map(str(FAULT_MAPS / "dense_0p15m.json"))
     summary = run_flight(pmap, camera_factory("oracle")(pmap), options={"max_time_s": 60})
     assert summary["detections"] > 5000  # it flew and kept taking the flood
 
 
-def test_that_a_map_flown_at_1000_m_with_the_oracle_never_crashes(tmp_path):
-    pmap = _flight_map(tmp_path, "high", replace(load_map("map1"), altitude_m=1000.0))
+def test_that_a_map_flown_at_1000_m_with_the_oracle_never_crashes():
+    pmap = load_map(str(FAULT_MAPS / "map1_1000m.json"))
     summary = run_flight(pmap, camera_factory("oracle")(pmap), options={"max_time_s": 60})
     assert summary["detections"] > 0
 
@@ -276,6 +268,6 @@ def test_that_a_frame_with_a_duplicate_stores_one_tree_and_a_cluster_pair_two():
 @pytest.mark.slow
 def test_that_map1_at_1_m_with_the_vision_camera_reaches_each_tree_once():
     # the double reach of issue #12: tree 1 reached twice (two T_d entries from one frame's two windows)
-    pmap = replace(load_map("map1"), altitude_m=1.0)
+    pmap = load_map(str(FAULT_MAPS / "map1_1m.json"))
     summary = run_flight(pmap, camera_factory("sim")(pmap, seed=0), seed=0)
     assert summary["repeated_targets"] == [] and summary["success"]

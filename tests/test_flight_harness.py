@@ -126,7 +126,7 @@ def test_that_garbage_partial_lines_and_silence_do_not_break_a_flight():
 
 
 class RecordingCamera(object):
-    """A duck-typed camera: sees nothing, records what the harness passes."""
+    """A duck-typed camera: sees nothing (an empty frame each time), records what the harness passes."""
 
     frame_period_ms = 200
     latency_ms = 20
@@ -136,7 +136,7 @@ class RecordingCamera(object):
 
     def capture(self, t_ms, true_pose, hidden=frozenset()):
         self.calls.append((t_ms, true_pose, hidden))
-        return ["ALIVE"]
+        return ["MARK STOP"]  # the app takes off only once it has heard the camera (a frame mark or detection)
 
 
 def test_that_any_object_with_the_camera_interface_can_fly():

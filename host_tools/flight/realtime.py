@@ -33,6 +33,7 @@ from host_tools import fileio
 from host_tools.errors import ForaNavError
 from host_tools.flight import harness
 from host_tools.maps import map_from_dict, map_to_dict
+from jevois_module.ForaNavTrees import foranav_serial
 
 POSE_PERIOD_MS = 10  # simulated ms between pose messages and between wall-clock pacing points
 READY_TIMEOUT_S = 60.0  # the camera process renders the orthomosaic and loads the model before READY
@@ -248,6 +249,9 @@ def camera_process_main(argv=None):
             time.sleep(max(0.0, next_frame + latency_s - time.monotonic()))
             lines = camera.process(frame.image)  # ... and its lines leave the module a latency later
             camera.score.add(t_ms, _pixels(lines, camera), _truth(frame, pmap))
+        else:  # on the ground: an empty frame, not rendered (the module streams from power-on; the app takes
+            #    off only once it has heard the camera)
+            pty_master.write(("%s\r\n%s\r\n" % (foranav_serial.FRAME_START, foranav_serial.FRAME_STOP)).encode())
         # the next frame is taken when this one is out (period = latency, as on the JeVois, where processing
         # sets the frame rate); a host more than a frame behind drops the frames it missed, as the camera does
         next_frame += period_s
