@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: setup test demo bench paper-tests deploy clean camera-runtime docs
+.PHONY: setup test demo bench paper-tests deploy clean camera-runtime docs capp capp-asan bolt
 
 setup: $(STAMP)
 
@@ -12,9 +12,48 @@ $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e '.[test]'
+	$(MAKE) capp
 	touch $(STAMP)
 
-test: $(STAMP) camera-runtime
+# The C flight app (crazyflie_app/bolt, docs/bolt.md). capp: the pure core as a host shared library, loaded by
+# crazyflie_app/c_core.py (foranav fly --app c); capp-asan: the same under AddressSanitizer + UBSan, with the
+# differential test and a flight run against it; bolt: the Bolt firmware with the app, from a firmware checkout.
+CAPP_DIR     := crazyflie_app/bolt
+CAPP_SOURCES := $(addprefix $(CAPP_DIR)/src/,nav_core.c nav_kalman.c nav_trees.c nav_serial.c nav_host.c)
+CAPP_CFLAGS  := -std=c11 -O2 -Wall -Wextra -Werror -fPIC -shared
+ASAN_FLAGS   := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
+
+capp: build/libforanav_nav.so
+
+build/libforanav_nav.so: $(CAPP_SOURCES) $(CAPP_DIR)/src/nav_core.h
+	mkdir -p build
+	gcc $(CAPP_CFLAGS) -o $@ $(CAPP_SOURCES) -lm
+
+build/libforanav_nav_asan.so: $(CAPP_SOURCES) $(CAPP_DIR)/src/nav_core.h
+	mkdir -p build
+	gcc $(CAPP_CFLAGS) -g $(ASAN_FLAGS) -o $@ $(CAPP_SOURCES) -lm
+
+# the default-suite differential test, the C app's flights and the UART2 tests; CAPP_ASAN_MARK="slow or not slow"
+# adds the 20 random plantations and the paper maps 2-3
+CAPP_ASAN_MARK ?= not slow
+capp-asan: build/libforanav_nav_asan.so
+	FORANAV_CAPP_LIB=$(CURDIR)/build/libforanav_nav_asan.so \
+	LD_PRELOAD="$$(gcc -print-file-name=libasan.so) $$(gcc -print-file-name=libubsan.so)" \
+	ASAN_OPTIONS=detect_leaks=0:abort_on_error=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 PYTHONMALLOC=malloc \
+	$(BIN)/python -m pytest -q -p no:cacheprovider -m "$(CAPP_ASAN_MARK)" \
+		tests/test_capp_differential.py tests/test_capp_app.py tests/test_cf_firmware_uart2.py
+
+bolt:
+	@test -n "$(CRAZYFLIE_BASE)" || { echo "usage: make bolt CRAZYFLIE_BASE=/path/to/crazyflie-firmware"; exit 2; }
+	mkdir -p $(CAPP_DIR)/build
+	@# not a git checkout (a snapshot): the firmware's version script needs a build_info.json
+	test -d "$(CRAZYFLIE_BASE)/.git" || test -f $(CAPP_DIR)/build/build_info.json || \
+		echo '{"tag": "snapshot"}' > $(CAPP_DIR)/build/build_info.json
+	$(MAKE) -C $(CAPP_DIR) CRAZYFLIE_BASE=$(abspath $(CRAZYFLIE_BASE)) bolt_defconfig
+	$(MAKE) -C $(CAPP_DIR) CRAZYFLIE_BASE=$(abspath $(CRAZYFLIE_BASE)) -j2
+	@ls -l $(CAPP_DIR)/build/bolt.bin
+
+test: $(STAMP) capp camera-runtime
 	$(BIN)/python -m pytest -q
 
 # The camera's own runtime (Python 3.7 + numpy 1.16.6 + OpenCV 4.10) in .venv-camera/, built once from the
@@ -41,4 +80,4 @@ deploy: $(STAMP)
 	$(BIN)/foranav deploy --sd "$(SD)" $(DEPLOY_FLAGS)
 
 clean:
-	rm -rf $(VENV) .venv-camera runs .pytest_cache
+	rm -rf $(VENV) .venv-camera runs .pytest_cache build $(CAPP_DIR)/build

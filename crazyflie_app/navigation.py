@@ -23,6 +23,7 @@ C -> Python names (Navigation.c -> here)::
     removeCoordinate()                 TreeMemory.mark_visited()
     logGetVarId() + logGetFloat()      ids resolved once in app_main, read with log_get_float()
     paramGetUint(deck.bcFlow2)         the same, plus deck.bcLoco (a warning: without it the estimate drifts)
+    (none: the CF2 auto-arms)          cf.supervisor_request_arming(True) after the checks (the Bolt needs it)
     DEBUG_PRINT(...)                   Crazyflie.debug_print(DEBUG_MODULE, ...)
 
 The C app's known weaknesses and what this port does about each (tests named in brackets):
@@ -155,6 +156,13 @@ class NavigationApp(object):
                 cf.debug_print(DEBUG_MODULE, "Waiting for the camera")
             yield v_task_delay(m2t(CAMERA_WAIT_POLL_MS))
             waited_ms += CAMERA_WAIT_POLL_MS
+        # the last check passed. The Bolt requires arming (CONFIG_MOTORS_REQUIRE_ARMING): until armed the
+        # supervisor replaces every setpoint by the null one
+        if not cf.supervisor_request_arming(True):
+            cf.debug_print(DEBUG_MODULE, "Arming refused by the supervisor, aborting")
+            yield v_task_delay(PORT_MAX_DELAY)
+            return
+        cf.debug_print(DEBUG_MODULE, "Armed")
         self.core.start(cf.x_task_get_tick_count())
         self._print_events()
         while True:

@@ -23,6 +23,13 @@ def hover(sp, vx=0.0, vy=0.0, z=HEIGHT):
     return sp
 
 
+def armed_crazyflie(**kwargs):
+    """A Bolt (arming required) whose client armed it, as the app does after its checks."""
+    cf = Crazyflie(**kwargs)
+    assert cf.supervisor_request_arming(True)
+    return cf
+
+
 def streaming_app(cf, stop_after_ms=None, period=10, vx=0.0):
     """A task that streams hover setpoints, optionally stalling (no more setpoints) after stop_after_ms."""
     sp = setpoint_t()
@@ -109,7 +116,7 @@ def test_that_an_accepted_setpoint_is_stamped_and_copied():
 
 def test_that_a_stalled_app_levels_out_after_500_ms_and_recovers_when_setpoints_resume():
     # Fixture: stream for 3 s, stall 1 s (> 500 ms, < 2 s), stream again
-    cf = Crazyflie()
+    cf = armed_crazyflie()
     sp = setpoint_t()
 
     def app():
@@ -133,7 +140,7 @@ def test_that_a_stalled_app_levels_out_after_500_ms_and_recovers_when_setpoints_
 
 
 def test_that_level_out_keeps_height_and_lets_horizontal_speed_decay():
-    cf = Crazyflie()
+    cf = armed_crazyflie()
     cf.x_task_create(streaming_app(cf, stop_after_ms=3000, vx=0.3), "APP", 1)
     cf.run_until(3000)
     speed_before = cf.model.truth.vx
@@ -144,7 +151,7 @@ def test_that_level_out_keeps_height_and_lets_horizontal_speed_decay():
 
 
 def test_that_a_stall_longer_than_2_s_locks_the_motors_for_good():
-    cf = Crazyflie()
+    cf = armed_crazyflie()
     cf.x_task_create(streaming_app(cf, stop_after_ms=3000), "APP", 1)
     cf.run_until(6000)
     assert (2990 + 2001, LOCKED) in cf.supervisor.events
@@ -157,7 +164,7 @@ def test_that_a_stall_longer_than_2_s_locks_the_motors_for_good():
 
 
 def test_that_streaming_null_setpoints_lands_without_a_watchdog_event():
-    cf = Crazyflie()
+    cf = armed_crazyflie()
     sp = setpoint_t()
 
     def app():

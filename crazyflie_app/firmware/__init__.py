@@ -19,6 +19,10 @@ C (firmware)                           Python (this package)
 ``commanderGetInactivityTime()``       ``Crazyflie.commander_get_inactivity_time()``
 ``supervisorUpdate`` & state machine   ``supervisor.Supervisor.supervisor_update`` (level-out 500 ms, lock 2 s)
 ``supervisorOverrideSetpoint``         ``supervisor.Supervisor.supervisor_override_setpoint``
+``supervisorRequestArming(doArm)``     ``Crazyflie.supervisor_request_arming(do_arm)`` (Bolt: arming required,
+                                       disarm after 30 s armed on the ground or 3 s landed)
+``uart2Init``/``uart2GetDataWithTimeout``  ``Crazyflie.uart2_init`` / ``uart2_get_data_with_timeout(size, ticks)``
+                                       (``attach_uart2(url)`` plugs the wire in; 200-byte RX buffer, drops)
 ``logGetVarId(group, name)``           ``Crazyflie.log_get_var_id(group, name)`` (0xFFFF if unknown)
 ``logGetFloat/logGetUint(id)``         ``Crazyflie.log_get_float/log_get_uint(id)`` (assert on bad id)
 ``paramGetVarId(group, name)``         ``Crazyflie.param_get_var_id(group, name)`` -> ``ParamVarId``
@@ -33,7 +37,7 @@ stabilizer loop + PID position ctrl    ``system.Crazyflie._stabilizer_task`` + `
 =====================================  ================================================================
 
 What is not emulated: the attitude/rate loops and motor mixing (replaced by a closed-loop velocity model),
-CRTP/radio, the high-level commander, arming, and FreeRTOS time slicing between tasks of equal priority.
+CRTP/radio, the high-level commander, the arming spin-up check, and FreeRTOS time slicing between tasks of equal priority.
 """
 from crazyflie_app.firmware.commander import (COMMANDER_PRIORITY_CRTP, COMMANDER_PRIORITY_DISABLE,  # noqa: F401
                                               COMMANDER_PRIORITY_EXTRX, COMMANDER_PRIORITY_HIGHLEVEL,

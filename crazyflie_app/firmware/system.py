@@ -11,8 +11,10 @@ from crazyflie_app.firmware.logparam import (LOG_FLOAT, LOG_UINT8, PARAM_UINT8, 
                                               log_group, param_add, param_group)
 from crazyflie_app.firmware.mav_model import MavModel
 from crazyflie_app.firmware.supervisor import SUPERVISOR_STATES, Supervisor
+from crazyflie_app.firmware.uart2 import Uart2
 
 STABILIZER_TASK_PRI = 5
+UART2_RX_TASK_PRI = 5  # stands in for the USART2 receive interrupt
 POSITION_RATE_HZ = 100  # RATE_100_HZ: the position controller's rate
 STABILIZER_PERIOD_MS = 1000 // POSITION_RATE_HZ
 
@@ -77,13 +79,16 @@ class Console(object):
 class Crazyflie(object):
     """One emulated flight controller. Firmware calls are methods with the firmware's snake_case names."""
 
-    def __init__(self, seed=0, model_config=None, decks=("bcFlow2", "bcLoco"), start=(0.0, 0.0, 0.0)):
+    def __init__(self, seed=0, model_config=None, decks=("bcFlow2", "bcLoco"), start=(0.0, 0.0, 0.0),
+                 require_arming=True):
         self.scheduler = freertos.Scheduler()
         self.commander = Commander(self.scheduler)
-        self.supervisor = Supervisor()
+        self.console = Console(self.scheduler)
+        # the Bolt (bolt_defconfig: CONFIG_MOTORS_REQUIRE_ARMING=y); require_arming=False: the CF2's auto-arming
+        self.supervisor = Supervisor(require_arming, console=lambda text: self.console.debug_print("SUP", text))
         self.model = MavModel(model_config, seed=seed, start=start)
         self.registry = LogParamRegistry()
-        self.console = Console(self.scheduler)
+        self.uart2 = None  # attach_uart2(url): the camera's wire on the deck port
         self.decks = _Decks(decks)
         self.registry.register_log_group(STATE_ESTIMATE_LOG, self.model.estimate)
         self.registry.register_log_group(SUPERVISOR_LOG, _SupervisorInfo(self.supervisor))
@@ -114,6 +119,29 @@ class Crazyflie(object):
 
     def commander_get_inactivity_time(self):
         return self.commander.commander_get_inactivity_time()
+
+    # -- supervisor ---------------------------------------------------------------------------------------
+
+    def supervisor_request_arming(self, do_arm):
+        """supervisorRequestArming(doArm): True when the request was taken (arming needs PRE_FLIGHT)."""
+        return self.supervisor.supervisor_request_arming(do_arm, self.x_task_get_tick_count())
+
+    def supervisor_is_armed(self):
+        return self.supervisor.supervisor_is_armed()
+
+    # -- UART2 ----------------------------------------------------------------------------------------------
+
+    def attach_uart2(self, url):
+        """Plug a serial wire (a pty slave path) into the deck port's UART2 and start its receive task."""
+        self.uart2 = Uart2(self.scheduler, url)
+        self.scheduler.x_task_create(self.uart2.rx_task(), "UART2_RX", UART2_RX_TASK_PRI)
+        return self.uart2
+
+    def uart2_init(self, baudrate):
+        self.uart2.uart2_init(baudrate)
+
+    def uart2_get_data_with_timeout(self, size, timeout_ticks):
+        return self.uart2.uart2_get_data_with_timeout(size, timeout_ticks)
 
     # -- log / param / console ----------------------------------------------------------------------------
 

@@ -20,6 +20,7 @@ Examples:
   foranav fly --map map1 --realtime --speed 4
   foranav fly --map map1 --silence 40:2 --garbage-rate 0.2
   foranav fly --map map1 --camera oracle
+  foranav fly --map map1 --app c
   foranav fly --map map2 --camera oracle --dropout 0.3 --json
   foranav fly --map map3 --camera oracle --hide-tree 6 --hide-s 5 --mavlink udpout:127.0.0.1:14550
   foranav fly --map map1 --crowns ../shared/data/real/oilpalm_gearth_detectree2/boxes.csv --model real.npz
@@ -36,6 +37,7 @@ from host_tools.flight.vision_camera import model_option
 from host_tools.sim.cli_args import add_appearance_arguments, appearance_from_args
 
 CAMERA_CHOICES = ("oracle", "sim")
+APP_CHOICES = ("python", "c")
 PROGRESS_EVERY_S = 5.0  # wall-clock seconds between progress lines on stderr
 # Below 2 fps frames come further apart than the app's link watch allows (app.linkHoldMs, 1000 ms)
 FPS_RANGE = (2.0, 120.0)
@@ -85,6 +87,8 @@ def add_arguments(parser):
                         help="sim: the module runs with this model file (.npz), as the camera does with its "
                              "species parameter set to a model file (default: the map's target species model)")
     add_appearance_arguments(parser)
+    parser.add_argument("--app", choices=APP_CHOICES, default="python",
+                        help="flight app: python (default) or c (the C core of crazyflie_app/bolt, as on the Bolt)")
 
 
 def _options(args):
@@ -99,7 +103,7 @@ def _options(args):
             raise ForaNavError("--%s: must be in [0, 1], got %r" % (name.replace("_", "-"), getattr(args, name)))
     options = {"dropout": args.dropout, "model": {"estimator": args.estimator, "wind_gust_mps2": args.wind},
                "silence": [_window(text) for text in args.silence], "garbage_rate": args.garbage_rate,
-               "partial_rate": args.partial_rate}
+               "partial_rate": args.partial_rate, "app": args.app}
     if args.hide_tree is not None:
         options.update(hide_tree=args.hide_tree, hide_s=args.hide_s)
     if args.mavlink:

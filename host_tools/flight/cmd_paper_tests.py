@@ -12,6 +12,7 @@ Examples:
   foranav paper-tests --out runs/paper --json
   foranav paper-tests --tests 3,6 --jobs 1
   foranav paper-tests --crowns ../shared/data/real/oilpalm_gearth_detectree2/boxes.csv --model real.npz
+  foranav paper-tests --app c
 """
 import json
 import sys
@@ -33,6 +34,8 @@ def add_arguments(parser):
     parser.add_argument("--model", metavar="M", default=None,
                         help="the module runs with this model file (.npz) (default: the maps' target species model)")
     add_appearance_arguments(parser)
+    parser.add_argument("--app", choices=("python", "c"), default="python",
+                        help="flight app: python (default) or c (the C core of crazyflie_app/bolt)")
 
 
 def _selected(text):
@@ -79,7 +82,7 @@ def run(args):
                                                    else "FAIL", entry["wall_s"]), file=sys.stderr)
 
     results = paper_tests.run_tests(tests, out_dir=args.out, jobs=args.jobs, on_result=on_result,
-                                    camera_kwargs=camera_kwargs)
+                                    camera_kwargs=camera_kwargs, app=args.app)
     wall = round(time.monotonic() - started, 1)
     paths = paper_tests.write_outputs(results, Path(args.out), wall_s=wall, appearance=camera_kwargs.get("appearance"))
     if args.json:

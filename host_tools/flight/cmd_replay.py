@@ -26,6 +26,8 @@ def add_arguments(parser):
                         help="delay of the module's lines on the wire (default: one clip frame)")
     parser.add_argument("--json", action="store_true", help="print the full report (with per-frame rows and "
                         "setpoints) as one JSON object")
+    parser.add_argument("--app", choices=("python", "c"), default="python",
+                        help="flight app: python (default) or c (the C core of crazyflie_app/bolt)")
 
 
 def print_report(report, out=None):
@@ -64,7 +66,7 @@ def run(args):
     pmap = load_map(args.map) if args.map else None
     if args.latency_ms is not None and args.latency_ms < 0:
         raise ForaNavError("--latency-ms: must not be negative")
-    report = replay_clip(clip, pmap, latency_ms=args.latency_ms)
+    report = replay_clip(clip, pmap, latency_ms=args.latency_ms, app=args.app)
     if args.json:
         print(json.dumps(report, indent=2))
     else:

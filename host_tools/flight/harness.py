@@ -30,6 +30,8 @@ before the clock moves on, so the same map and seed give the same summary and th
     params         dict of app parameters to set before flight, by 'group.name' ('app.settleRadius': 5)
     start          (x, y) take-off point (default: the first waypoint)
     mavlink        live MAVLink output URL (e.g. 'udpout:127.0.0.1:14550'); needs out_dir (it tees the tlog)
+    app            the flight app: 'python' (crazyflie_app/navigation.py, default) or 'c' (the C core of
+                   crazyflie_app/bolt, crazyflie_app/c_app.py); both read the camera through the emulated UART2
     decks          decks present (default ('bcFlow2', 'bcLoco'))
     app            the flight app under test, by registered name (default 'python'; see register_app)
 
@@ -53,6 +55,7 @@ import numpy as np
 from crazyflie_app.firmware import Crazyflie, MavModelConfig, v_task_delay
 from crazyflie_app.firmware.supervisor import LANDED, LOCKED, WARNING_LEVEL_OUT
 from crazyflie_app.navigation import NavigationApp
+from crazyflie_app.uart2_link import Uart2Link
 from crazyflie_app.navigation_core import (PHASE_APPROACH, PHASE_DONE, PHASE_NAMES, PHASE_NO_CAMERA, PHASE_NO_DECK,
                                            rotate)
 from host_tools import fileio
@@ -122,17 +125,23 @@ def _options(options):
 
 # -- the app: a component the flight is composed with -----------------------------------------------------------
 
-def _python_app(cf, waypoints, serial_url, target_label):
-    return NavigationApp(cf, waypoints, serial_url, target_label=target_label)
+def _python_app(cf, waypoints, target_label):
+    return NavigationApp(cf, waypoints, None, link=Uart2Link(cf), target_label=target_label)
 
 
-_APPS = {"python": _python_app}
+def _c_app(cf, waypoints, target_label):
+    from crazyflie_app.c_app import CNavigationApp  # loads (and if stale, builds) the C core's shared library
+    return CNavigationApp(cf, waypoints, target_label=target_label)
+
+
+_APPS = {"python": _python_app, "c": _c_app}
 
 
 def register_app(name, factory):
     """Make flight option ``app=NAME`` available.
 
-    ``factory(cf, waypoints, serial_url, target_label) -> app``; the app registers its PARAM/LOG tables on
+    ``factory(cf, waypoints, target_label) -> app``, ``cf`` with the camera's wire attached to its emulated
+    UART2 (``cf.attach_uart2``), which the app reads as the Bolt's deck port; the app registers its PARAM/LOG tables on
     ``cf.registry`` and offers what the harness reads of the Python app: ``start()``, ``phase``,
     ``target_x``/``target_y``, ``params`` (cam_offset_x_m, cam_offset_y_m, cam_width_px, cam_height_px,
     focal_px), ``link`` (``close()``, ``lines_dropped``), ``core.counters`` (detections, out_of_column,
@@ -167,8 +176,9 @@ class FlightRig(object):
         self.cf = Crazyflie(seed=seed, model_config=model, decks=tuple(options["decks"]),
                             start=(float(start[0]), float(start[1]), 0.0))
         self.wire = PtyWire(lockstep=bool(options["lockstep"]))
+        self.cf.attach_uart2(self.wire.slave_path)  # the camera's wire on the deck port
         try:
-            self.app = factory(self.cf, pmap.waypoints, self.wire.slave_path, pmap.target_species)
+            self.app = factory(self.cf, pmap.waypoints, pmap.target_species)
         except BaseException:
             self.wire.close()
             raise

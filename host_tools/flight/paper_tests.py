@@ -69,16 +69,17 @@ def passed(summary):
     return all(criteria(summary).values())
 
 
-def fly_test(test, out_dir=None, map_path=None, camera_kwargs=None):
+def fly_test(test, out_dir=None, map_path=None, camera_kwargs=None, app="python"):
     """Fly one PaperTest -> the fly summary plus "test", "map", "situation", "passed", "wall_s".
 
-    ``camera_kwargs``: extra VisionCamera arguments (appearance, model) from the command line."""
+    ``camera_kwargs``: extra VisionCamera arguments (appearance, model) from the command line; ``app``: the
+    flight app, 'python' or 'c' (harness option ``app``)."""
     from host_tools.flight.vision_camera import fly_with_vision
     from host_tools.maps import load_map
 
     pmap = load_map(map_path or test.map)
     started = time.monotonic()
-    options = {"max_time_s": MAX_TIME_S}
+    options = {"max_time_s": MAX_TIME_S, "app": app}
     options.update(test.options)
     summary = fly_with_vision(pmap, seed=test.seed, options=options,
                               out_dir=None if out_dir is None else Path(out_dir) / ("test%d" % test.number),
@@ -88,14 +89,14 @@ def fly_test(test, out_dir=None, map_path=None, camera_kwargs=None):
     return summary
 
 
-def run_tests(tests=PAPER_TESTS, out_dir=None, jobs=None, on_result=None, camera_kwargs=None):
+def run_tests(tests=PAPER_TESTS, out_dir=None, jobs=None, on_result=None, camera_kwargs=None, app="python"):
     """Fly ``tests`` (in test order in the result); ``on_result(entry)`` is called as each one finishes."""
     jobs = max(1, min(len(tests), jobs or os.cpu_count() or 1))
     # The workers are fresh interpreters (spawn): importing host_tools limits their BLAS threads before numpy.
     by_number = {}
     context = multiprocessing.get_context("spawn")
     with concurrent.futures.ProcessPoolExecutor(max_workers=jobs, mp_context=context) as pool:
-        futures = [pool.submit(fly_test, test, out_dir, None, camera_kwargs) for test in tests]
+        futures = [pool.submit(fly_test, test, out_dir, None, camera_kwargs, app) for test in tests]
         for future in concurrent.futures.as_completed(futures):
             entry = future.result()
             by_number[entry["test"]] = entry

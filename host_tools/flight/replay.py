@@ -134,7 +134,7 @@ class _ClipCamera(object):
         self.runner = ModuleRunner(params=params, log_stream=_NullLog())
 
 
-def replay_clip(clip, pmap=None, *, latency_ms=None, seed=0, params=None):
+def replay_clip(clip, pmap=None, *, latency_ms=None, seed=0, params=None, app="python"):
     """Play ``clip`` (host_tools.sim.clip.Clip) through the module and the app -> the report dict."""
     if pmap is None:
         if clip.map is None:
@@ -149,7 +149,7 @@ def replay_clip(clip, pmap=None, *, latency_ms=None, seed=0, params=None):
     last_s = clip.frames[-1].t_s
     # the clip starts once the app follows the path, so the app must not wait for the camera before take-off
     options = {"start": (first.x, first.y), "max_time_s": last_s + 60.0,
-               "params": {"app.camWaitMs": 0, **(params or {})}}
+               "params": {"app.camWaitMs": 0, **(params or {})}, "app": app}
     camera = _ClipCamera(clip, pmap, latency_ms)
     flight = harness.Flight(pmap, camera, seed=seed, options=options)
     player = _ClipPlayer(flight, clip)

@@ -1,0 +1,232 @@
+"""Differential test: the C core (crazyflie_app/bolt/src via c_core) against the Python core, step by step.
+
+Both cores get the same inputs (time, estimated pose, each camera frame's detections and frame marks) from a
+closed loop flown by the Python core's commands: a small kinematic MAV (first-order velocity and height
+response), an ideal camera over the map's trees (pixel noise, dropout, 100 ms frames, 50 ms latency), a
+noisy estimate, and per map a window with detections hidden (recovery, abandon) and one of silence on the
+wire (link hold). After every call the outputs must agree: the phase, the command kind and events exactly,
+the setpoint (vx, vy, z), tree ids and world points within TOLERANCE. Both compute in float64; the only
+differences are the last bits of libm/numpy (hypot, the 2x2 inverse, BLAS summation order), far below it.
+A divergence fails with the first step that differs.
+
+Map 1 and one random plantation run by default (~10 s); all paper maps and the 20 random plantations of
+issue #13 are ``-m slow`` (``make capp-asan`` runs them all against the sanitizer build).
+"""
+import math
+
+import numpy as np
+import pytest
+
+from crazyflie_app.c_core import CNavigationCore, c_params
+from crazyflie_app.navigation_core import (PHASE_DONE, PHASE_NAMES, Detection, NavigationCore, NavigationParams,
+                                           Pose, rotate, unrotate)
+from host_tools.maps import load_map, map_from_dict
+
+TOLERANCE = 1e-9  # m/s, m, px: float64 against float64
+STEP_MS = 10
+FRAME_MS = 100
+LATENCY_MS = 50
+MAX_TIME_MS = 600000
+PIXEL_NOISE_PX = 1.5
+DROPOUT = 0.1
+VELOCITY_TAU_S = 0.3
+HEIGHT_TAU_S = 0.5
+WIDTH, HEIGHT = 352, 288
+PAPER_MAPS = ("map1", "map2", "map3")
+DEFAULT_PAPER_MAPS = ("map1",)
+DEFAULT_RANDOM_SEEDS = (101,)
+SLOW_RANDOM_SEEDS = tuple(range(1, 21))
+
+
+def random_plantation(seed):
+    """A varied plantation in the map format: 2-4 planting columns flown as a serpentine, palms along them
+    (jittered, some missing, some off-column), other species and a second palm row beside them."""
+    rng = np.random.default_rng(seed)
+    columns = int(rng.integers(2, 5))
+    length = float(rng.uniform(2.5, 5.0))
+    spacing = float(rng.uniform(0.8, 1.3))
+    x0 = 0.3
+    waypoints = []
+    for k in range(columns):
+        y = 0.45 - k * spacing
+        ends = [[x0, y], [x0 + length, y]]
+        waypoints += ends if k % 2 == 0 else ends[::-1]
+    trees, tree_id = [], 1
+    for k in range(columns):
+        y = 0.45 - k * spacing
+        pitch = float(rng.uniform(0.55, 0.9))
+        x = x0 + float(rng.uniform(0.3, 0.6))
+        while x < x0 + length - 0.2:
+            if rng.random() > 0.1:
+                species = "oil_palm" if rng.random() > 0.15 else str(rng.choice(["coconut", "citrus", "olive"]))
+                off = float(rng.normal(0.0, 0.06)) if rng.random() > 0.1 else float(rng.choice([-1, 1])) * 0.6
+                trees.append({"id": tree_id, "x": round(x + float(rng.normal(0, 0.03)), 3),
+                              "y": round(y + off, 3), "species": species,
+                              "crown_m": round(float(rng.uniform(0.25, 0.4)), 3)})
+                tree_id += 1
+            x += pitch
+    return map_from_dict({"name": "random %d" % seed, "altitude_m": round(float(rng.uniform(1.0, 1.4)), 2),
+                          "waypoints": waypoints, "trees": trees, "seed": seed}, source="<random %d>" % seed)
+
+
+def project(tree, x, y, z, yaw):
+    fwd, left = unrotate(yaw, tree.x - x, tree.y - y)
+    f = 1.0 / 0.0031
+    return WIDTH / 2.0 - left * f / z, HEIGHT / 2.0 - fwd * f / z
+
+
+class Divergence(AssertionError):
+    pass
+
+
+class TwinCores(object):
+    """Feeds both cores and compares their outputs after every call."""
+
+    def __init__(self, pmap):
+        params = NavigationParams()
+        params.altitude_m = pmap.altitude_m
+        self.py = NavigationCore(params, pmap.waypoints)
+        self.c = CNavigationCore(c_params(params), pmap.waypoints)
+        self.calls = 0
+
+    def _fail(self, t_ms, what, py_value, c_value):
+        raise Divergence("first divergence at call %d (t = %d ms, phase %s): %s: python %r, C %r"
+                         % (self.calls + 1, t_ms, PHASE_NAMES[self.py.phase], what, py_value, c_value))
+
+    def _close(self, t_ms, what, a, b):
+        if not (abs(a - b) <= TOLERANCE or (math.isnan(a) and math.isnan(b))):
+            self._fail(t_ms, what, a, b)
+
+    def _compare_state(self, t_ms):
+        self.calls += 1
+        if self.py.phase != self.c.phase:
+            self._fail(t_ms, "phase", PHASE_NAMES[self.py.phase], PHASE_NAMES[self.c.phase])
+        for name in ("target_id", "waypoint_index"):
+            if getattr(self.py, name) != getattr(self.c, name):
+                self._fail(t_ms, name, getattr(self.py, name), getattr(self.c, name))
+        py_events = [(e.kind, e.t_ms, e.tree_id, e.detail) for e in self.py.events]
+        c_events = [(e.kind, e.t_ms, e.tree_id, e.detail) for e in self.c.events]
+        if py_events != c_events:
+            self._fail(t_ms, "events", py_events, c_events)
+        for a, b in zip(self.py.events, self.c.events):
+            self._close(t_ms, "event %s x" % a.kind, a.x, b.x)
+            self._close(t_ms, "event %s y" % a.kind, a.y, b.y)
+        if self.py.counters != self.c.counters:
+            self._fail(t_ms, "counters", self.py.counters, self.c.counters)
+        del self.py.events[:], self.c.events[:]
+
+    def start(self, t_ms):
+        self.py.start(t_ms)
+        self.c.start(t_ms)
+        self._compare_state(t_ms)
+
+    def step(self, t_ms, pose):
+        a, b = self.py.step(t_ms, pose), self.c.step(t_ms, pose)
+        if a.kind != b.kind:
+            self._fail(t_ms, "command kind", a, b)
+        for name in ("vx", "vy", "z"):
+            self._close(t_ms, "setpoint " + name, getattr(a, name), getattr(b, name))
+        self._compare_state(t_ms)
+        return a
+
+    def frame(self, t_ms, detections, pose):
+        self.py.on_frame_mark(t_ms)
+        self.c.on_frame_mark(t_ms)
+        if not detections or self.py.phase == PHASE_DONE:
+            return
+        ids_py, ids_c = self.py.on_frame(t_ms, detections, pose), self.c.on_frame(t_ms, detections, pose)
+        if ids_py != ids_c:
+            self._fail(t_ms, "frame tree ids", ids_py, ids_c)
+        for (ax, ay), (bx, by) in zip(self.py.last_frame_points, self.c.last_frame_points):
+            self._close(t_ms, "detection x", ax, bx)
+            self._close(t_ms, "detection y", ay, by)
+        self._compare_state(t_ms)
+
+
+def fly_twins(pmap, seed):
+    """Fly the closed loop with both cores; returns (steps compared, phases seen, Python core)."""
+    rng = np.random.default_rng([seed, 13])
+    twins = TwinCores(pmap)
+    x, y = map(float, pmap.waypoints[0])
+    z = vx = vy = 0.0
+    trees = [t for t in pmap.trees if t.species == pmap.target_species]
+    hide_from = int(rng.integers(20000, 60000))
+    hide_to = hide_from + int(rng.integers(3000, 20000))
+    silence_from = int(rng.integers(30000, 90000))
+    silence_to = silence_from + int(rng.integers(1200, 2500))
+    pending = []  # (deliver_ms, detections)
+    phases = set()
+    twins.start(0)
+    steps = 0
+    for t in range(0, MAX_TIME_MS, STEP_MS):
+        yaw = float(rng.normal(0.0, 0.5))
+        est = Pose(x + float(rng.normal(0, 0.005)), y + float(rng.normal(0, 0.005)),
+                   max(0.0, z + float(rng.normal(0, 0.003))), yaw, vx + float(rng.normal(0, 0.005)),
+                   vy + float(rng.normal(0, 0.005)))
+        while pending and pending[0][0] <= t:
+            _, detections = pending.pop(0)
+            twins.frame(t, detections, est)
+        if t % FRAME_MS == 0 and z > 0.05 and not silence_from <= t < silence_to:
+            detections = []
+            if not hide_from <= t < hide_to:
+                for tree in trees:
+                    u, v = project(tree, x, y, z, 0.0)
+                    r = 0.5 * tree.crown_m / 0.0031 / z
+                    if r <= u <= WIDTH - r and r <= v <= HEIGHT - r and rng.random() >= DROPOUT:
+                        detections.append(Detection(u + float(rng.normal(0, PIXEL_NOISE_PX)),
+                                                    v + float(rng.normal(0, PIXEL_NOISE_PX))))
+            pending.append((t + LATENCY_MS, detections))
+        command = twins.step(t, est)
+        steps += 1
+        phases.add(PHASE_NAMES[twins.py.phase])
+        if twins.py.phase == PHASE_DONE:
+            break
+        dt = STEP_MS / 1000.0
+        if command.kind == "hover":
+            wx, wy = rotate(yaw, command.vx, command.vy)
+            vx += (wx - vx) * dt / VELOCITY_TAU_S
+            vy += (wy - vy) * dt / VELOCITY_TAU_S
+            z += (command.z - z) * dt / HEIGHT_TAU_S
+        else:
+            vx = vy = 0.0
+            z = max(0.0, z - 0.5 * dt)
+        x += vx * dt
+        y += vy * dt
+    return steps, phases, twins.py
+
+
+def check_map(pmap, seed):
+    steps, phases, core = fly_twins(pmap, seed)
+    assert "DONE" in phases, "the flight did not finish: phases %s" % sorted(phases)
+    assert core.counters.reached > 0
+    return steps, phases
+
+
+@pytest.mark.parametrize("name", [pytest.param(n, marks=() if n in DEFAULT_PAPER_MAPS else pytest.mark.slow)
+                                  for n in PAPER_MAPS])
+def test_that_the_c_core_follows_the_python_core_step_by_step_on_the_paper_maps(name):
+    steps, phases = check_map(load_map(name), seed=0)
+    assert {"TAKEOFF", "FOLLOW_PATH", "APPROACH", "RETURN_TO_PATH", "LAND"} <= phases
+    assert steps > 1000
+
+
+@pytest.mark.parametrize("seed", DEFAULT_RANDOM_SEEDS)
+def test_that_the_c_core_follows_the_python_core_on_random_plantations(seed):
+    check_map(random_plantation(seed), seed)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", SLOW_RANDOM_SEEDS)
+def test_that_the_c_core_follows_the_python_core_on_20_random_plantations(seed):
+    check_map(random_plantation(seed), seed)
+
+
+def test_that_a_divergence_names_the_first_differing_step():
+    # Fixture: the C core flies a different altitude, so the first take-off setpoint already differs
+    pmap = load_map("map1")
+    twins = TwinCores(pmap)
+    twins.c.params.altitude_m = pmap.altitude_m + 0.01
+    twins.start(0)
+    # Test / Assert
+    with pytest.raises(Divergence, match=r"first divergence at call 2 \(t = 0 ms, phase TAKEOFF\): setpoint z"):
+        twins.step(0, Pose(0.3, 0.45, 0.0, 0.0, 0.0, 0.0))
