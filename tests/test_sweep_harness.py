@@ -7,6 +7,7 @@ from host_tools.errors import ForaNavError
 from host_tools.flight import harness
 from host_tools.maps import load_map, map_to_dict
 from crazyflie_app.navigation import NavigationApp
+from crazyflie_app.uart2_link import Uart2Link
 
 
 def test_that_fly_pickles_by_reference_and_flies_plain_data():
@@ -24,16 +25,16 @@ def test_that_the_app_is_a_component_chosen_by_name():
     # Fixture: a registered app factory that records that it was used
     built = []
 
-    def recording_app(cf, waypoints, serial_url, target_label):
-        built.append(serial_url)
-        return NavigationApp(cf, waypoints, serial_url, target_label=target_label)
+    def recording_app(cf, waypoints, target_label):
+        built.append(target_label)
+        return NavigationApp(cf, waypoints, None, link=Uart2Link(cf), target_label=target_label)
 
     harness.register_app("recording", recording_app)
     data = map_to_dict(load_map("map2"))
     # Test
     summary = harness.fly(data, camera="oracle", app="recording", seed=1)
     # Assert
-    assert len(built) == 1 and built[0].startswith("/dev/")
+    assert built == ["oil_palm"]
     default = harness.fly(data, camera="oracle", seed=1)  # app="python"
     assert len(built) == 1  # the default app is not the recording one
     summary.pop("cpu_s")
