@@ -161,14 +161,3 @@ def test_that_the_app_package_depends_only_on_the_serial_grammar_of_ours():
                 assert not name.startswith("host_tools"), path
                 assert not name.startswith("jevois_module") or name in (
                     "jevois_module.ForaNavTrees", "jevois_module.ForaNavTrees.foranav_serial"), path
-
-
-def test_that_the_readme_section_lists_every_param_with_its_default():
-    from pathlib import Path
-
-    from crazyflie_app.navigation_core import NavigationParams
-
-    text = (Path(__file__).resolve().parents[1] / "README.md").read_text()
-    defaults = NavigationParams()
-    for entry in PARAM_TABLE.entries:
-        assert "| `app.%s` | %g |" % (entry.name, getattr(defaults, entry.attribute)) in text, entry.name

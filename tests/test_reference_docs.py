@@ -15,6 +15,14 @@ def test_that_the_committed_reference_tables_are_current():
     assert stale == [], "stale docs/reference/%s: run make docs (python -m host_tools.docs_gen)" % ", ".join(stale)
 
 
+def test_that_the_readme_command_table_is_generated_and_current():
+    text = docs_gen.README.read_text(encoding="utf-8")
+    assert docs_gen.README_BEGIN in text and docs_gen.README_END in text
+    assert not docs_gen.readme_is_stale(), "stale README.md command table: run make docs"
+    for name in cli.COMMANDS:
+        assert "| `foranav %s` |" % name in text
+
+
 def test_that_every_command_and_option_is_in_the_command_table():
     text = docs_gen.commands_markdown()
     for name, (module_name, help_text) in cli.COMMANDS.items():
