@@ -13,7 +13,7 @@ COLOURS = {"target": "#2e7d32", "non_target": "#9e9e9e", "reached": "#1565c0", "
 
 
 def plot_trajectory(flight, path):
-    """Draw ``flight`` (a harness _Flight after its run) into the PNG ``path`` (atomic write)."""
+    """Draw ``flight`` (a harness Flight after its run) into the PNG ``path`` (atomic write)."""
     pmap = flight.pmap
     fig, ax = plt.subplots(figsize=(8, 3.6), dpi=110)
     world = getattr(flight.camera, "world", None)
