@@ -235,6 +235,9 @@ CASES = [
     (["sweep", "--count", "2", "--out", "keep.png"], "--out"),
     (["sweep", "--count", "2", "--faults", "extreme", "--out", "sw"], "--faults"),
     (["sweep", "--count", "2", "--seed", "nan", "--out", "sw"], "--seed"),
+    (["sweep", "--count", "2", "--model", "{in}/big_field.csv", "--out", "sw"], "--model"),
+    (["sweep", "--count", "2", "--camera", "oracle", "--model", "oil_palm.npz", "--out", "sw"], "--model"),
+    (["sweep", "--count", "2", "--app", "rust", "--out", "sw"], "--app"),
     # the command itself
     (["nosuch"], "nosuch"),
     ([], "command"),

@@ -152,3 +152,31 @@ def test_that_the_progress_bar_shows_flights_done_rate_and_eta():
     first, last = stream.getvalue().splitlines()
     assert "6/12 flights" in first and "0.50 flights/s" in first and "ETA 0m12s" in first and "1 not flawless" in first
     assert "12/12 flights" in last and "ETA 0m00s" in last
+
+
+def test_that_a_sweeps_own_fly_arguments_reach_every_flight_and_its_replay_command(tmp_path):
+    # Fixture: the sweep's --app and --model, as cmd_sweep writes them into each spec
+    from host_tools.detection import common
+
+    model = str(common.model_path("oil_palm"))
+    plain = flight_spec(3, 0, camera="sim", ranges=SMALL)
+    spec = flight_spec(3, 0, camera="sim", ranges=SMALL, fly_args=["--app", "c", "--model", model])
+    # Test
+    camera_kwargs, options = cond.harness_inputs(spec["conditions"], spec["camera"], spec["fly_args"])
+    command = fly_command(spec, tmp_path / "m.json")
+    # Assert: the flight gets them, the replay command carries them, a plain sweep's spec has no such key
+    assert options["app"] == "c" and camera_kwargs["model"] == model
+    assert command.endswith("--app c --model %s" % model)
+    assert "fly_args" not in plain and {k: v for k, v in spec.items() if k != "fly_args"} == plain
+
+
+def test_that_a_c_app_flight_of_a_sweep_flies_like_the_python_one():
+    # Fixture: one small oracle plantation, flown by both apps through the sweep's task
+    spec = flight_spec(5, 1, camera="oracle", ranges=SMALL)
+    c_spec = dict(spec, fly_args=["--app", "c"])
+    # Test
+    python_result, c_result = fly_task(spec), fly_task(c_spec)
+    # Assert: the same flight (the two cores agree step by step, so the summaries match)
+    assert python_result["status"] == c_result["status"] == "ok", c_result.get("traceback")
+    strip = lambda s: {k: v for k, v in s.items() if k not in OUTPUT_KEYS}  # noqa: E731
+    assert strip(c_result["summary"]) == strip(python_result["summary"])

@@ -34,7 +34,7 @@ from pathlib import Path
 from host_tools import argtypes, fileio
 from host_tools.errors import ForaNavError
 from host_tools.flight.vision_camera import model_option
-from host_tools.sim.cli_args import add_appearance_arguments, appearance_from_args
+from host_tools.sim.cli_args import add_appearance_arguments, appearance_from_args, appearance_spec_from_args
 
 CAMERA_CHOICES = ("oracle", "sim")
 APP_CHOICES = ("python", "c")
@@ -148,8 +148,15 @@ def flight_options(args):
 
 
 def camera_kwargs(args):
-    """The camera factory's keyword arguments of parsed fly arguments (sweeps build their flights with it)."""
-    return _camera_kwargs(args)
+    """The camera factory's keyword arguments of parsed fly arguments, photo crowns and model included (sweeps
+    build their flights with it; the species check against one map is run()'s)."""
+    kwargs = _camera_kwargs(args)
+    spec = appearance_spec_from_args(args)
+    if not spec.default:
+        kwargs["appearance"] = spec.to_dict()
+    if args.model is not None:
+        kwargs["model"] = model_option(args.model)
+    return kwargs
 
 
 def print_table(summary, out=None):

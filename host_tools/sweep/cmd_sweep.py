@@ -27,6 +27,7 @@ import dataclasses
 import json
 import sys
 import time
+from pathlib import Path
 
 from host_tools import argtypes, fileio
 from host_tools.errors import ForaNavError
@@ -51,10 +52,36 @@ def add_arguments(parser):
     parser.add_argument("--scheduler", help="address of a running Dask scheduler (tcp://host:port)")
     parser.add_argument("--workers", type=argtypes.int_range(1, 1024), default=None,
                         help="LocalCluster worker processes (default: one per core)")
+    parser.add_argument("--app", choices=("python", "c"), default="python",
+                        help="flight app of every flight: python (default) or c (the C core of crazyflie_app/bolt)")
+    parser.add_argument("--model", metavar="M", default=None,
+                        help="sim: the module runs with this model file (.npz) in every flight")
+    parser.add_argument("--crowns", nargs="+", action="extend", default=None, metavar="CSV",
+                        help="sim: draw every plantation's trees from the boxes of these annotation CSVs "
+                             "(photo crowns, docs/simulator.md)")
     parser.add_argument("--report-only", action="store_true", help="write the report of the stored flights")
     parser.add_argument("--json", action="store_true", help="print the report as one JSON object")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
     add_range_arguments(parser)
+
+
+def _fly_arguments(args):
+    """The ``foranav fly`` arguments every flight of the sweep gets (paths absolute, files checked now)."""
+    from host_tools.flight.vision_camera import model_option
+    from host_tools.maps import SPECIES
+    from host_tools.sim.cli_args import appearance_from_args
+
+    words = []
+    if args.app != "python":
+        words += ["--app", args.app]
+    if (args.model is not None or args.crowns) and args.camera != "sim":
+        raise ForaNavError("--crowns/--model: only with --camera sim (the oracle sees no pixels)")
+    if args.model is not None:
+        words += ["--model", str(model_option(args.model))]
+    if args.crowns:
+        appearance_from_args(args, SPECIES, "the sweep's plantations")  # every CSV loads, one line if not
+        words += ["--crowns"] + [str(Path(path).resolve()) for path in args.crowns]
+    return words
 
 
 def _overrides(texts):
@@ -127,9 +154,12 @@ def run(args):
         ranges = ranges_from_args(args)
         overrides = _overrides(args.condition)
         distributions = preset(args.faults, overrides)  # bad ranges fail before anything is written
+        fly_args = _fly_arguments(args)
         identity = {"seed": args.seed, "faults": args.faults, "camera": args.camera,
                     "conditions": sorted(overrides.items()), "distributions": distributions,
                     "ranges": dataclasses.asdict(ranges)}
+        if fly_args:  # only then: a plain sweep's identity is what earlier versions stored
+            identity["fly_args"] = fly_args
         fileio.check_output_dir(args.out, "--out")
         store = SweepStore(args.out)
         try:
@@ -138,7 +168,7 @@ def run(args):
             store.close()
             raise
         specs = make_specs(args.count, args.seed, faults=args.faults, camera=args.camera, ranges=ranges,
-                           overrides=overrides)
+                           overrides=overrides, fly_args=fly_args)
         store.start_run(sys.argv)
         finished = len(store.finished() & {s["index"] for s in specs})
         bar = None if args.quiet or args.json else ProgressBar(len(specs), finished)

@@ -126,14 +126,15 @@ def fly_arguments(conditions):
     return args
 
 
-def harness_inputs(conditions, camera):
+def harness_inputs(conditions, camera, extra_arguments=()):
     """(camera_kwargs, options) for harness.fly, built by ``foranav fly``'s own option code from
-    ``fly_arguments(conditions)``: one definition, so the replay command flies exactly the same flight."""
+    ``fly_arguments(conditions)`` and the sweep's ``extra_arguments`` (``--app``, ``--model``, ``--crowns``):
+    one definition, so the replay command flies exactly the same flight."""
     import argparse
 
     from host_tools.flight import cmd_fly
 
     parser = argparse.ArgumentParser(prog="foranav fly")
     cmd_fly.add_arguments(parser)
-    args = parser.parse_args(["--map", "-", "--camera", camera] + fly_arguments(conditions))
+    args = parser.parse_args(["--map", "-", "--camera", camera] + fly_arguments(conditions) + list(extra_arguments))
     return cmd_fly.camera_kwargs(args), cmd_fly.flight_options(args)

@@ -30,7 +30,7 @@ def fly_task(spec):
     wall0, cpu0 = time.perf_counter(), time.process_time()
     result = {"index": spec["index"], "spec": spec, "worker": "%s:%d" % (platform.node(), os.getpid())}
     try:
-        camera_kwargs, options = harness_inputs(spec["conditions"], spec["camera"])
+        camera_kwargs, options = harness_inputs(spec["conditions"], spec["camera"], spec.get("fly_args", ()))
         summary = fly(spec["map"], camera=spec["camera"], camera_kwargs=camera_kwargs, options=options,
                       seed=spec["seed"])
         summary.pop("cpu_s", None)

@@ -20,21 +20,25 @@ from host_tools.sweep import conditions as cond
 SEED_LIMIT = 2 ** 31 - 1
 
 
-def flight_spec(sweep_seed, index, *, faults="none", camera="sim", ranges=None, overrides=None):
-    """Spec of flight ``index`` of the sweep with ``sweep_seed``."""
+def flight_spec(sweep_seed, index, *, faults="none", camera="sim", ranges=None, overrides=None, fly_args=()):
+    """Spec of flight ``index`` of the sweep with ``sweep_seed``; ``fly_args``: the sweep's own ``foranav fly``
+    arguments for every flight (``--app c``, ``--model M``, ``--crowns CSV ...``), replayed with it."""
     rng = np.random.default_rng([int(sweep_seed), int(index), 0x5EE9])
     plantation_seed = int(rng.integers(0, SEED_LIMIT))
     flight_seed = int(rng.integers(0, SEED_LIMIT))
     conditions = cond.draw(rng, cond.preset(faults, overrides), camera)
     ranges = ranges or PlantationRanges()
     pmap, factors = generate(plantation_seed, ranges)
-    return {"index": int(index), "seed": flight_seed, "plantation_seed": plantation_seed, "camera": camera,
-            "faults": faults, "conditions": conditions, "factors": factors,
-            "map": map_to_dict(pmap)}
+    spec = {"index": int(index), "seed": flight_seed, "plantation_seed": plantation_seed, "camera": camera,
+            "faults": faults, "conditions": conditions, "factors": factors, "map": map_to_dict(pmap)}
+    if fly_args:  # only then: the specs of a plain sweep keep their bytes
+        spec["fly_args"] = list(fly_args)
+    return spec
 
 
-def make_specs(count, sweep_seed, *, faults="none", camera="sim", ranges=None, overrides=None):
-    return [flight_spec(sweep_seed, i, faults=faults, camera=camera, ranges=ranges, overrides=overrides)
+def make_specs(count, sweep_seed, *, faults="none", camera="sim", ranges=None, overrides=None, fly_args=()):
+    return [flight_spec(sweep_seed, i, faults=faults, camera=camera, ranges=ranges, overrides=overrides,
+                        fly_args=fly_args)
             for i in range(int(count))]
 
 
@@ -52,7 +56,7 @@ def ranges_arguments(ranges):
 def fly_command(spec, map_path):
     """The exact ``foranav fly`` command that replays this flight (its map written at ``map_path``)."""
     words = ["foranav", "fly", "--map", str(map_path), "--camera", spec["camera"], "--seed", str(spec["seed"])]
-    words += cond.fly_arguments(spec["conditions"])
+    words += cond.fly_arguments(spec["conditions"]) + list(spec.get("fly_args", ()))
     return " ".join(shlex.quote(w) for w in words)
 
 
