@@ -10,37 +10,26 @@ Phases (``custom_mode`` in the telemetry heartbeat)::
     FOLLOW_PATH (last waypoint) -> [RECOVERY -> APPROACH: go back once per tree abandoned unseen] -> LAND -> DONE
     (null setpoints, motors off);  NO_DECK: no Flow deck, aborted;  NO_CAMERA: camera never heard, never took off
 
-The state machine lives here; each job it calls has its module (composition, no inheritance):
-``nav_types`` (phases, records, ``NavigationParams``), ``camera_geometry`` (pixel <-> ground, the pose at
-capture, duplicate merge), ``path_following`` (FOLLOW_PATH and the planting column), ``visual_servo`` (the
-pixel filter, the servo law and the reached rule of APPROACH), ``link_watch`` (the camera link), and
-``tree_memory`` (T_d and the visited list). This module re-exports the public names of all of them.
-
-* A tree enters T_d when seen inside the planting column of the *current* segment (orthogonal distance
-  <= ``columnFactor`` x ``crownSize``); after ``minHits`` detections the nearest such tree becomes the target t*,
-  approached visually (``visual_servo``).
-* RECOVERY (insect view memory): when the MAV is farther than ``recoveryDistance`` (delta) from the stored
-  s_t, or the target has not been seen for ``lostTimeoutMs``, the MAV re-approaches s_t by position until a
-  detection associates with the target again, then visual guidance resumes; after ``recoveryTimeoutMs`` the
-  tree is abandoned (it goes to the visited list, flagged not reached) so the mission goes on.
-* Camera link watch (``link_watch``): a silent camera makes the MAV hold, then land.
-* After a tree, RETURN_TO_PATH flies back to the current segment until the cross-track error is below
-  ``returnTolerance``.
-* Going back once: a tree abandoned because recovery timed out without seeing it again (it was hidden) is
-  flagged in the visited list. At the last waypoint, before landing, the app goes back to each flagged
-  tree in turn (nearest first): the entry is restored into T_d as the target and approached by memory
-  (RECOVERY, whose timeouts start only once the MAV is within ``returnTolerance`` of s_t), then visually.
-  Reached or abandoned again, it is never flagged again; when no flagged tree is left, LAND.
+The state machine lives here; each job it calls has its module (composition, no inheritance), whose
+docstring describes it: ``nav_types`` (phases, records, ``NavigationParams``), ``camera_geometry`` (pixel <->
+ground, the pose at capture, one detection per crown), ``frame_input`` (a frame's detections into T_d),
+``path_following`` (FOLLOW_PATH, the planting column), ``visual_servo`` (APPROACH: the pixel filter, the servo
+law, the reached rule), ``recovery`` (RECOVERY, going back once for hidden trees), ``link_watch`` (a silent
+camera: hold, then land) and ``tree_memory`` (T_d and the visited list). This module re-exports their public
+names. After a tree, RETURN_TO_PATH flies back to the current segment until the cross-track error is below
+``returnTolerance``.
 """
 import math
 
 from crazyflie_app.camera_geometry import CameraGeometry, PoseHistory, merge_duplicates, rotate, unrotate
+from crazyflie_app.frame_input import FrameInput
 from crazyflie_app.link_watch import HOLD, LinkWatch
 from crazyflie_app.nav_types import (PHASE_APPROACH, PHASE_BOOT, PHASE_DONE, PHASE_FOLLOW_PATH, PHASE_LAND,
                                      PHASE_NAMES, PHASE_NO_CAMERA, PHASE_NO_DECK, PHASE_RECOVERY,
                                      PHASE_RETURN_TO_PATH, PHASE_TAKEOFF, POSE_HISTORY_LENGTH, Command, Counters,
                                      Detection, Event, NavigationParams, Pose)
 from crazyflie_app.path_following import PathFollower, distance_to_segment
+from crazyflie_app.recovery import ABANDON, ABANDON_UNSEEN, Recovery, nearest
 from crazyflie_app.tree_memory import TreeMemory
 from crazyflie_app.visual_servo import VisualServo, servo_velocity
 
@@ -63,28 +52,32 @@ class NavigationCore:
         self.link = LinkWatch(params)
         self.memory = TreeMemory(params.tree_capacity, params.visited_capacity)
         self.counters = Counters()
+        self.frames = FrameInput(params, self.route, self.memory, self.counters)
+        self.recovery = Recovery(params)
         self.phase = PHASE_BOOT
         self.target_id = 0  # 0 = none
         self.events = []  # drained by the caller
         self._phase_since = 0
         self._takeoff_since = None
-        self._recovery_since = None
-        self._target_since = 0
         self._last_tick = None
         self._poses = PoseHistory()
         self.last_frame_points = []  # world positions of the last frame's detections
-        self.revisiting = False  # flying back, before landing, to a tree abandoned while hidden
-        self._revisit_arrived = False  # ... and over its stored s_t once
 
     # -- the components' state, under the names the app, the harness and the tests read -----------------
 
     path = property(lambda self: self.route.path)
-    filter = property(lambda self: self.servo.filter)
     pixel_error = property(lambda self: self.servo.pixel_error)
     captured = property(lambda self: self.servo.captured)
-    last_frame_ms = property(lambda self: self.link.last_frame_ms)
     link_lost = property(lambda self: self.link.link_lost)
     link_aborted = property(lambda self: self.link.link_aborted)
+
+    @property
+    def revisiting(self):
+        return self.recovery.revisiting
+
+    @revisiting.setter
+    def revisiting(self, value):
+        self.recovery.revisiting = value
 
     @property
     def waypoint_index(self):
@@ -94,20 +87,11 @@ class NavigationCore:
     def waypoint_index(self, value):
         self.route.waypoint_index = value
 
-    def camera_ground_point(self, pose):
-        return self.camera.ground_point(pose)
-
     def pixel_to_world(self, u, v, pose):
         return self.camera.pixel_to_world(u, v, pose)
 
-    def current_segment(self):
-        return self.route.current_segment()
-
     def in_planting_column(self, x, y):
         return self.route.in_planting_column(x, y)
-
-    def settle_thresholds(self, t_ms):
-        return self.servo.settle_thresholds(t_ms)
 
     # -- camera input -------------------------------------------------------------------------------------
 
@@ -120,42 +104,12 @@ class NavigationCore:
 
         Returns, per detection, the id of the stored or visited tree it was associated with (0: ignored,
         outside the planting column or no room in T_d)."""
-        p = self.params
-        pose_capture = self._poses.at(t_ms - p.cam_latency_ms) or pose_now
+        pose_capture = self._poses.at(t_ms - self.params.cam_latency_ms) or pose_now
         points = [self.camera.pixel_to_world(d.u, d.v, pose_capture) for d in detections]
         self.last_frame_points = points
-        merged, owner = merge_duplicates(detections, points, p.duplicate_radius_m)
-        self.counters.duplicates += len(detections) - len(merged)
-        assignment = self.memory.associate([point for _, point in merged], p.merge_radius_m)
-        protected = {tree_id for kind, tree_id in assignment if kind == "tree"}
-        mav_xy = (pose_now.x, pose_now.y)
-        merged_ids = []
-        for (det, (wx, wy)), (kind, tree_id) in zip(merged, assignment):
-            merged_ids.append(self._take_detection(t_ms, det, wx, wy, kind, tree_id, protected, mav_xy,
-                                                   pose_capture, pose_now))
-        self.counters.detections += len(detections)
-        return [merged_ids[k] for k in owner]
-
-    def _take_detection(self, t_ms, det, wx, wy, kind, tree_id, protected, mav_xy, pose_capture, pose_now):
-        """One (de-duplicated) detection of a frame -> the id of its tree (0: ignored)."""
-        if kind == "visited":
-            self.counters.on_visited += 1
-            return tree_id
-        if kind is None:
-            if not self.route.in_planting_column(wx, wy):
-                self.counters.out_of_column += 1
-                return 0
-            tree_id, evicted = self.memory.add(wx, wy, t_ms, det.u, det.v, mav_xy, protected)
-            self._evicted(t_ms, evicted, "T_d full")
-            if not tree_id:
-                return 0  # T_d full of trees seen in this very frame: counted in memory.unstored
-            protected.add(tree_id)  # a later new tree of this frame must not evict this one
-            self.events.append(Event("tree_added", t_ms, tree_id, wx, wy))
-        else:
-            self.memory.update(tree_id, wx, wy, t_ms, det.u, det.v)
-        if tree_id == self.target_id:
-            self._measure_target(t_ms, det, pose_capture, pose_now)
-        return tree_id
+        return self.frames.take(t_ms, detections, points, (pose_now.x, pose_now.y), self.events,
+                                lambda: self.target_id, self._evicted,
+                                lambda t, det: self._measure_target(t, det, pose_capture, pose_now))
 
     def _evicted(self, t_ms, evicted, why):
         for gone in evicted:
@@ -277,18 +231,13 @@ class NavigationCore:
         return [t for t in self.memory.trees.values()
                 if t.hits >= p.min_hits and self.route.in_planting_column(t.x, t.y)]
 
-    def _nearest(self, items, pose):
-        """The item (tree or visited entry) nearest to the camera's ground point (ties: lowest id)."""
-        cx, cy = self.camera.ground_point(pose)
-        return min(items, key=lambda t: (math.hypot(t.x - cx, t.y - cy), t.id))
-
     def _select_target(self, t_ms, pose):
         candidates = self.eligible_trees()
         if not candidates:
             return False
-        tree = self._nearest(candidates, pose)
+        tree = nearest(candidates, self.camera.ground_point(pose))
         self.target_id = tree.id
-        self._target_since = t_ms
+        self.recovery.target_since = t_ms
         self.events.append(Event("target_selected", t_ms, tree.id, tree.x, tree.y))
         pose_capture = self._poses.at(tree.last_ms - self.params.cam_latency_ms) or pose
         if t_ms - tree.last_ms > self.params.lost_timeout_ms:
@@ -302,7 +251,7 @@ class NavigationCore:
 
     def _start_tracking(self, t_ms, u, v):
         self.servo.start(t_ms, u, v)
-        self._recovery_since = None
+        self.recovery.since = None
         self._enter(PHASE_APPROACH, t_ms)
 
     def _drop_target(self):
@@ -315,7 +264,7 @@ class NavigationCore:
         if tree is None:  # evicted meanwhile: nothing left to approach
             self._drop_target()
             return self._after_tree(t_ms, pose)
-        if t_ms - self._target_since > p.target_timeout_ms:
+        if self.recovery.target_expired(t_ms):
             return self._abandon(t_ms, pose, tree)
         self.servo.predict(t_ms)
         cx, cy = self.camera.ground_point(pose)
@@ -350,20 +299,12 @@ class NavigationCore:
         return self._step_land(t_ms, pose)
 
     def _start_revisit(self, t_ms, pose):
-        """Go back once for the nearest tree abandoned while hidden (flagged in the visited list): restore it
-        into T_d as the target and fly to s_t by memory. False if there is none."""
-        flagged = [e for e in self.memory.visited if e.revisit]
-        if not flagged:
+        """Go back once for the nearest tree abandoned while hidden, by memory first. False if there is none."""
+        tree = self.recovery.start_revisit(t_ms, self.memory, self.camera.ground_point(pose), (pose.x, pose.y),
+                                           self.camera.centre, self.events)
+        if tree is None:
             return False
-        entry = self._nearest(flagged, pose)
-        u0, v0 = self.camera.centre
-        tree, evicted = self.memory.restore(entry.id, self.params.min_hits, u0, v0, (pose.x, pose.y))
-        for gone in evicted:
-            self.events.append(Event("tree_evicted", t_ms, gone, detail="T_d full"))
-        self.revisiting, self._revisit_arrived = True, False
         self.target_id = tree.id
-        self._target_since = t_ms
-        self.events.append(Event("revisit", t_ms, tree.id, tree.x, tree.y, detail="abandoned while hidden"))
         self._begin_recovery(t_ms, tree, 0.0, counted=False)
         return True
 
@@ -371,19 +312,17 @@ class NavigationCore:
 
     def _begin_recovery(self, t_ms, tree, e_d, counted=True):
         self.counters.recoveries += int(counted)
-        self._recovery_since = t_ms
+        self.recovery.since = t_ms
         self.servo.lose()
-        why = "e_d %.2f m" % e_d if e_d > self.params.recovery_distance_m else "not seen %d ms" % (
-            t_ms - tree.last_ms)
         self.events.append(Event("recovery" if counted else "approach_by_memory", t_ms, tree.id, tree.x, tree.y,
-                                 detail=why))
+                                 detail=self.recovery.reason(t_ms, tree, e_d)))
         self._enter(PHASE_RECOVERY, t_ms)
 
     def _abandon(self, t_ms, pose, tree, unseen=False):
         """Give the target up. ``unseen``: recovery timed out without seeing it again (hidden); such a tree is
         flagged for one more try before landing, unless this already was that try."""
         if tree is not None:
-            revisit = unseen and not self.revisiting
+            revisit = unseen and not self.recovery.revisiting
             self.memory.mark_visited(tree.id, t_ms, (pose.x, pose.y), reached=False, revisit=revisit)
             self.counters.abandoned += 1
             self.events.append(Event("abandoned", t_ms, tree.id, tree.x, tree.y,
@@ -392,20 +331,8 @@ class NavigationCore:
         return self._after_tree(t_ms, pose)
 
     def _step_recovery(self, t_ms, pose):
-        p = self.params
         tree = self.memory.get(self.target_id)
-        cx, cy = self.camera.ground_point(pose)
-        ex, ey = (tree.x - cx, tree.y - cy) if tree is not None else (0.0, 0.0)
-        distance = math.hypot(ex, ey)
-        if self.revisiting and not self._revisit_arrived and tree is not None:
-            # going back: the recovery and target clocks start once the MAV is over s_t
-            self._revisit_arrived = distance <= p.return_tolerance_m
-            self._recovery_since = self._target_since = t_ms
-        if tree is None or t_ms - self._target_since > p.target_timeout_ms:
-            return self._abandon(t_ms, pose, tree)
-        if t_ms - self._recovery_since > p.recovery_timeout_ms:
-            return self._abandon(t_ms, pose, tree, unseen=True)
-        speed = min(p.recovery_speed, p.servo_gain * distance)
-        if distance < 1e-9:
-            return self._hover()
-        return self._hover(*unrotate(pose.yaw_deg, ex / distance * speed, ey / distance * speed))
+        decision = self.recovery.step(t_ms, pose, tree, self.camera.ground_point(pose))
+        if decision in (ABANDON, ABANDON_UNSEEN):
+            return self._abandon(t_ms, pose, tree, unseen=decision == ABANDON_UNSEEN)
+        return self._hover(*decision)
