@@ -13,11 +13,11 @@ Phases (``custom_mode`` in the telemetry heartbeat)::
 The state machine lives here; each job it calls has its module (composition, no inheritance), whose
 docstring describes it: ``nav_types`` (phases, records, ``NavigationParams``), ``camera_geometry`` (pixel <->
 ground, the pose at capture, one detection per crown), ``frame_input`` (a frame's detections into T_d),
-``path_following`` (FOLLOW_PATH, the planting column), ``visual_servo`` (APPROACH: the pixel filter, the servo
-law, the reached rule), ``recovery`` (RECOVERY, going back once for hidden trees), ``link_watch`` (a silent
-camera: hold, then land) and ``tree_memory`` (T_d and the visited list). This module re-exports their public
-names. After a tree, RETURN_TO_PATH flies back to the current segment until the cross-track error is below
-``returnTolerance``.
+``vertical`` (TAKEOFF, LAND), ``path_following`` (FOLLOW_PATH, the planting column), ``visual_servo``
+(APPROACH: the pixel filter, the servo law, the reached rule), ``recovery`` (RECOVERY, going back once for
+hidden trees), ``link_watch`` (a silent camera: hold, then land) and ``tree_memory`` (T_d, the visited list).
+This module re-exports their public names. After a tree, RETURN_TO_PATH flies back to the current segment
+until the cross-track error is below ``returnTolerance``.
 """
 import math
 
@@ -31,6 +31,7 @@ from crazyflie_app.nav_types import (PHASE_APPROACH, PHASE_BOOT, PHASE_DONE, PHA
 from crazyflie_app.path_following import PathFollower, distance_to_segment
 from crazyflie_app.recovery import ABANDON, ABANDON_UNSEEN, Recovery, nearest
 from crazyflie_app.tree_memory import TreeMemory
+from crazyflie_app.vertical import NULL_COMMAND, TakeoffRule, landing_setpoint
 from crazyflie_app.visual_servo import VisualServo, servo_velocity
 
 __all__ = ["PHASE_APPROACH", "PHASE_BOOT", "PHASE_DONE", "PHASE_FOLLOW_PATH", "PHASE_LAND", "PHASE_NAMES",
@@ -54,11 +55,11 @@ class NavigationCore:
         self.counters = Counters()
         self.frames = FrameInput(params, self.route, self.memory, self.counters)
         self.recovery = Recovery(params)
+        self.takeoff = TakeoffRule(params)
         self.phase = PHASE_BOOT
         self.target_id = 0  # 0 = none
         self.events = []  # drained by the caller
         self._phase_since = 0
-        self._takeoff_since = None
         self._last_tick = None
         self._poses = PoseHistory()
         self.last_frame_points = []  # world positions of the last frame's detections
@@ -70,22 +71,9 @@ class NavigationCore:
     captured = property(lambda self: self.servo.captured)
     link_lost = property(lambda self: self.link.link_lost)
     link_aborted = property(lambda self: self.link.link_aborted)
-
-    @property
-    def revisiting(self):
-        return self.recovery.revisiting
-
-    @revisiting.setter
-    def revisiting(self, value):
-        self.recovery.revisiting = value
-
-    @property
-    def waypoint_index(self):
-        return self.route.waypoint_index
-
-    @waypoint_index.setter
-    def waypoint_index(self, value):
-        self.route.waypoint_index = value
+    revisiting = property(lambda self: self.recovery.revisiting)
+    waypoint_index = property(lambda self: self.route.waypoint_index,
+                              lambda self, index: setattr(self.route, "waypoint_index", index))
 
     def pixel_to_world(self, u, v, pose):
         return self.camera.pixel_to_world(u, v, pose)
@@ -177,29 +165,21 @@ class NavigationCore:
         return Command("hover", vx, vy, self.params.altitude_m)
 
     def _step_boot(self, t_ms, pose):
-        return Command("null", 0.0, 0.0, 0.0)
+        return NULL_COMMAND
 
     _step_done = _step_boot
 
     def _step_takeoff(self, t_ms, pose):
-        if abs(pose.z - self.params.altitude_m) > self.params.takeoff_tolerance_m:
-            self._takeoff_since = None
-        elif self._takeoff_since is None:
-            self._takeoff_since = t_ms
-        elif t_ms - self._takeoff_since >= self.params.takeoff_settle_ms:
-            self._takeoff_since = None
+        if self.takeoff.done(t_ms, pose):
             self._enter(PHASE_FOLLOW_PATH, t_ms)
         return self._hover()
 
     def _step_land(self, t_ms, pose):
-        p = self.params
-        elapsed = t_ms - self._phase_since
-        if elapsed < p.land_step_ms:
-            return Command("hover", 0.0, 0.0, p.land_height_m)
-        if elapsed < 2 * p.land_step_ms:
-            return Command("hover", 0.0, 0.0, p.land_final_m)
-        self._enter(PHASE_DONE, t_ms)
-        return Command("null", 0.0, 0.0, 0.0)
+        command = landing_setpoint(self.params, t_ms - self._phase_since)
+        if command is None:
+            self._enter(PHASE_DONE, t_ms)
+            return NULL_COMMAND
+        return command
 
     # -- path following -----------------------------------------------------------------------------------
 
@@ -289,10 +269,10 @@ class NavigationCore:
     def _after_tree(self, t_ms, pose):
         """A target is done (reached, abandoned or evicted): back to the path, or, while going back for
         abandoned trees after the last waypoint, on to the next one or to landing."""
-        if not self.revisiting:
+        if not self.recovery.revisiting:
             self._enter(PHASE_RETURN_TO_PATH, t_ms)
             return self._hover()
-        self.revisiting = False
+        self.recovery.revisiting = False
         if self._start_revisit(t_ms, pose):
             return self._hover()
         self._enter(PHASE_LAND, t_ms)
