@@ -186,7 +186,7 @@ def _calibrate(model, domain_index, frames, rng, log):
             hs = _below_quantile(similarities[labels], hs_q)
             for var_q in CUE_QUANTILES:
                 var = _below_quantile(variances[labels], var_q)
-                predicted = (scores > svm) & (similarities > hs) & (variances > var)
+                predicted = detector_core.passes_thresholds(scores, similarities, variances, svm, hs, var)
                 recall = (predicted & labels).sum() / float(labels.sum())
                 accuracy = 0.5 * (recall + (~predicted & ~labels).sum() / float((~labels).sum()))  # balanced
                 key = (recall >= MIN_RECALL, accuracy, recall, -abs(svm))
