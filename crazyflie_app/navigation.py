@@ -13,10 +13,10 @@ C -> Python names (Navigation.c -> here)::
                                        set_hover_setpoint(sp, vx, vy, z, yaw)  (body velocity, abs z and yaw)
     memset(&setpoint, 0, ...)          set_null_setpoint(sp)  (motors off)
     cpxPacketCallback(cpxRx)           NavigationApp.camera_task() + on_camera_line(line)  (text over UART)
-    is_at_target_mainroad()            NavigationCore._waypoint_reached() / _follow_velocity()
-    drone_speed() / drone_speed2()     NavigationCore._follow_velocity() / navigation_core.servo_velocity()
+    is_at_target_mainroad()            path_following.PathFollower.waypoint_reached() / follow_velocity()
+    drone_speed() / drone_speed2()     PathFollower.follow_velocity() / visual_servo.servo_velocity()
     Move_to_TreeTop()                  NavigationCore._step_approach()  (non-blocking, one tick per call)
-    is_at_target() (0.7 m switch)      NavigationCore._step_approach() -> _start_recovery()  (app.recoveryDist)
+    is_at_target() (0.7 m switch)      NavigationCore._step_approach() -> _begin_recovery()  (app.recoveryDist)
     kalmanFilterInit/Predict/Update()  pixel_kalman.PixelKalmanFilter(), .predict(dt_s), .update(u, v)
     trees[], numTrees                  tree_memory.TreeMemory.trees  (dict by stable id), LOG app.numTrees
     treeBlacklist[]                    tree_memory.TreeMemory.visited  (bounded), LOG app.numVisited

@@ -15,7 +15,7 @@ Association is nearest-neighbour with exclusivity per camera frame: each detecti
 nearest stored *or visited* tree within the merge radius, and no two detections of one frame go to the same
 tree (two trees seen together are two trees, even 0.47 m apart in a cluster). One crown seen twice in one
 frame (two detector windows closer than ``app.dupRadius``) is merged by the core before association
-(``navigation_core.merge_duplicates``).
+(``camera_geometry.merge_duplicates``).
 """
 import math
 from dataclasses import dataclass

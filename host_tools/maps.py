@@ -24,12 +24,13 @@ import math
 from dataclasses import dataclass, field, asdict
 from pathlib import Path
 
+from crazyflie_app.path_following import COLUMN_FACTOR, distance_to_segment, within_column
 from host_tools.errors import ForaNavError
 from host_tools import fileio
 
 SPECIES = ("oil_palm", "coconut", "date_palm", "citrus", "olive")
 OBJECT_KINDS = ("roof", "road_cross")
-COLUMN_RULE_FACTOR = 1.5  # paper: trees farther than 1.5 crown sizes from the path are outside the column
+COLUMN_RULE_FACTOR = COLUMN_FACTOR  # paper: trees farther than 1.5 crown sizes from the path are outside the column
 BUILTIN_DIR = Path(__file__).resolve().parent / "data" / "maps"
 MAX_SEED = 2 ** 32 - 1  # numpy's RandomState takes seeds up to this
 MAX_INTEGER_NUMBER = 10 ** 15  # an integer beyond this in a map is a typo (and beyond 1e308 float() fails)
@@ -76,20 +77,14 @@ class PlantationMap:
         raise KeyError(tree_id)
 
 
-def distance_to_segment(px, py, ax, ay, bx, by):
-    """Horizontal distance from point p to segment a-b (metres)."""
-    dx, dy = bx - ax, by - ay
-    length2 = dx * dx + dy * dy
-    t = 0.0 if length2 == 0.0 else max(0.0, min(1.0, ((px - ax) * dx + (py - ay) * dy) / length2))
-    return math.hypot(px - (ax + t * dx), py - (ay + t * dy))
-
-
 def distance_to_path(px, py, waypoints):
-    return min(distance_to_segment(px, py, *a, *b) for a, b in zip(waypoints[:-1], waypoints[1:]))
+    """Horizontal distance from point p to the nearest segment of the path (the app's segment geometry)."""
+    return min(distance_to_segment(px, py, a, b) for a, b in zip(waypoints[:-1], waypoints[1:]))
 
 
 def in_planting_column(x, y, crown_m, waypoints):
-    return distance_to_path(x, y, waypoints) <= COLUMN_RULE_FACTOR * crown_m
+    """The app's planting-column rule, against every segment of the path."""
+    return within_column(distance_to_path(x, y, waypoints), crown_m, COLUMN_RULE_FACTOR)
 
 
 # ----------------------------------------------------------------------------------------------------------

@@ -31,11 +31,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from crazyflie_app.navigation_core import NavigationParams
 from host_tools.errors import ForaNavError
-from host_tools.maps import COLUMN_RULE_FACTOR, PlantationMap, Tree, WorldObject, distance_to_path, map_from_dict
+from host_tools.maps import (COLUMN_RULE_FACTOR, PlantationMap, Tree, WorldObject, distance_to_path, in_planting_column,
+                             map_from_dict)
 from host_tools.maps import map_to_dict
 
-APP_CROWN_M = 0.35  # the app's crownSize parameter (crazyflie_app navigation_core default)
+APP_CROWN_M = NavigationParams.crown_size_m  # the app's crownSize parameter (its default)
 AMBIGUITY_MARGIN_M = 0.15
 COLUMN_START_X_M = 0.3
 COLUMN_END_MARGIN_M = 0.4  # first/last slot this far inside the column's ends (clear of the turn segments)
@@ -140,7 +142,7 @@ def generate(seed, ranges=None):
     placed_roofs = _place_beside(rng, ranges, d, layout, waypoints, "roof", d["roofs"])
     trees = []
     for i, (x, y, species, crown) in enumerate(layout.trees):
-        target = species == "oil_palm" and distance_to_path(x, y, waypoints) <= COLUMN_RULE_FACTOR * crown
+        target = species == "oil_palm" and in_planting_column(x, y, crown, waypoints)
         trees.append(Tree(i + 1, round(x, 3), round(y, 3), species, round(crown, 3), target))
     _check_unambiguous(trees, waypoints)
     altitude = round(d["altitude_m"], 3)

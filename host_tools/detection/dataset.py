@@ -14,6 +14,7 @@ import numpy as np
 from host_tools import annotations, images
 from host_tools.errors import ForaNavError
 
+import foranav_detector as detector_core
 import foranav_features as features
 
 EDGE_TOLERANCE_PX = 0.5  # a box this close to the frame edge is taken as cut by it
@@ -134,10 +135,6 @@ def top_descriptor(frame, cx, cy, side, transform=0):
 
 
 def pixel_window(frame, cx, cy, side):
-    """Integer slices (rows, cols) of a window clipped to the frame."""
-    side = int(round(side))
-    x0 = int(round(cx - side / 2.0))
-    y0 = int(round(cy - side / 2.0))
-    x0 = max(0, min(frame.width - side, x0))
-    y0 = max(0, min(frame.height - side, y0))
+    """Integer slices (rows, cols) of a window clipped to the frame (the detector's window clamp)."""
+    x0, y0, side = detector_core.window_in_frame(cx, cy, side, frame.height, frame.width)
     return slice(y0, y0 + side), slice(x0, x0 + side)

@@ -52,8 +52,7 @@ def passes(model, domain_index, cues, settings=None):
     detector = detector_core.TreeDetector(model, settings)
     detector.domain_index = domain_index
     score, colour, texture = cues
-    return (score > detector.threshold("svm_threshold") and colour > detector.threshold("hs_threshold")
-            and texture > detector.threshold("variance_threshold"))
+    return detector_core.passes_thresholds(score, colour, texture, *detector.thresholds())
 
 
 def classify_window(model, value, hsv, settings=None, small=None, domain_index=0):

@@ -13,6 +13,8 @@ import numpy as np
 from host_tools import fileio
 from host_tools.detection import dataset, evaluation
 
+import foranav_detector as detector_core
+
 MAX_WINDOWS = 200  # per imagery and label (seeded sample)
 CUES = ("svm", "colour", "texture", "all")
 WEAK_POSITIVE_SHARE = 0.5  # a cue passing fewer of an imagery's crowns than this is warned about
@@ -55,7 +57,8 @@ def cue_pass_rates(model, imageries, seed=0):
 def _passes_each(model, domain_index, cues):
     domain = model.domains[domain_index]
     score, colour, texture = cues
-    each = [score > domain.svm_threshold, colour > domain.hs_threshold, texture > domain.variance_threshold]
+    each = list(detector_core.threshold_tests(score, colour, texture, domain.svm_threshold, domain.hs_threshold,
+                                              domain.variance_threshold))
     return each + [all(each)]
 
 

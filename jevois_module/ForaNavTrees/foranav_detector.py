@@ -232,6 +232,11 @@ class TreeDetector(object):
             return float(self.model.edge_threshold)
         return float(getattr(self.model.domains[self.domain_index], name))
 
+    def thresholds(self):
+        """(svm, hs, variance) thresholds of the current domain, settings first (see passes_thresholds)."""
+        return (self.threshold("svm_threshold"), self.threshold("hs_threshold"),
+                self.threshold("variance_threshold"))
+
     def window_sizes(self, frame_width):
         return self.settings.window_sizes or model_window_sizes(self.model, frame_width)
 
@@ -460,11 +465,32 @@ def _fuse(group, threshold, margin):
     return Detection(cx, cy, side, side, group[0][0])
 
 
+def window_in_frame(cx, cy, side, height, width):
+    """Integer (x0, y0, side) of the square window of centre (cx, cy), kept inside a height x width frame
+    (the window clamp; host tools cut their training and evaluation windows with it too)."""
+    side = int(round(side))
+    x0 = int(round(cx - side / 2.0))
+    y0 = int(round(cy - side / 2.0))
+    x0 = max(0, min(width - side, x0))
+    y0 = max(0, min(height - side, y0))
+    return x0, y0, side
+
+
 def _pixel_window(candidate, shape):
     """Integer (x0, y0, side) of a candidate's window, kept inside the frame."""
-    side = int(round(candidate[3]))
-    x0 = int(round(candidate[1] - side / 2.0))
-    y0 = int(round(candidate[2] - side / 2.0))
-    x0 = max(0, min(shape[1] - side, x0))
-    y0 = max(0, min(shape[0] - side, y0))
-    return x0, y0, side
+    return window_in_frame(candidate[1], candidate[2], candidate[3], shape[0], shape[1])
+
+
+def threshold_tests(score, colour, texture, svm_threshold, hs_threshold, variance_threshold):
+    """The three-threshold rule, test by test: (SVM score, colour score, texture cue) each exceeds its
+    threshold. Numbers, or numpy arrays (elementwise)."""
+    return score > svm_threshold, colour > hs_threshold, texture > variance_threshold
+
+
+def passes_thresholds(score, colour, texture, svm_threshold, hs_threshold, variance_threshold):
+    """The three-threshold rule: a window is a tree when all three tests pass (elementwise for arrays)."""
+    svm_ok, colour_ok, texture_ok = threshold_tests(score, colour, texture, svm_threshold, hs_threshold,
+                                                    variance_threshold)
+    if isinstance(svm_ok, np.ndarray):
+        return svm_ok & colour_ok & texture_ok
+    return svm_ok and colour_ok and texture_ok

@@ -1,0 +1,58 @@
+"""Camera input of the navigation core: one frame's detections (their ground points, at the pose of capture)
+are merged when they are one crown seen twice, associated with T_d or the visited list (``T_d``: within
+``mergeRadius``), and new trees admitted by the planting-column rule of the current segment.
+
+* A tree enters T_d when seen inside the planting column of the *current* segment (orthogonal distance
+  <= ``columnFactor`` x ``crownSize``); after ``minHits`` detections the nearest such tree becomes the target t*.
+"""
+from crazyflie_app.camera_geometry import merge_duplicates
+from crazyflie_app.nav_types import Event
+
+
+class FrameInput:
+    """Feeds T_d (``memory``) from frames; the target's own detections go back to the caller."""
+
+    def __init__(self, params, route, memory, counters):
+        self.params = params
+        self.route = route  # the PathFollower: its current segment's planting column admits new trees
+        self.memory = memory
+        self.counters = counters
+
+    def take(self, t_ms, detections, points, mav_xy, events, target_id, evicted, measure):
+        """Handle one frame: ``points`` the ground positions of ``detections``. ``target_id()`` is the
+        current target, ``evicted(t_ms, ids, why)`` is told of trees pushed out of T_d and ``measure(t_ms,
+        det)`` of each detection of the target, as they happen. Returns, per detection, the id of its tree
+        (0: ignored, outside the planting column or no room in T_d)."""
+        p = self.params
+        merged, owner = merge_duplicates(detections, points, p.duplicate_radius_m)
+        self.counters.duplicates += len(detections) - len(merged)
+        assignment = self.memory.associate([point for _, point in merged], p.merge_radius_m)
+        protected = {tree_id for kind, tree_id in assignment if kind == "tree"}
+        merged_ids = []
+        for (det, (wx, wy)), (kind, tree_id) in zip(merged, assignment):
+            tree_id, stored = self._take_detection(t_ms, det, wx, wy, kind, tree_id, protected, mav_xy, events,
+                                                   evicted)
+            if stored and tree_id == target_id():
+                measure(t_ms, det)
+            merged_ids.append(tree_id)
+        self.counters.detections += len(detections)
+        return [merged_ids[k] for k in owner]
+
+    def _take_detection(self, t_ms, det, wx, wy, kind, tree_id, protected, mav_xy, events, evicted):
+        """One (de-duplicated) detection -> (the id of its tree, 0: ignored; whether it is in T_d)."""
+        if kind == "visited":
+            self.counters.on_visited += 1
+            return tree_id, False
+        if kind is None:
+            if not self.route.in_planting_column(wx, wy):
+                self.counters.out_of_column += 1
+                return 0, False
+            tree_id, gone = self.memory.add(wx, wy, t_ms, det.u, det.v, mav_xy, protected)
+            evicted(t_ms, gone, "T_d full")
+            if not tree_id:
+                return 0, False  # T_d full of trees seen in this very frame: counted in memory.unstored
+            protected.add(tree_id)  # a later new tree of this frame must not evict this one
+            events.append(Event("tree_added", t_ms, tree_id, wx, wy))
+        else:
+            self.memory.update(tree_id, wx, wy, t_ms, det.u, det.v)
+        return tree_id, True

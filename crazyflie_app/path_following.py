@@ -1,0 +1,91 @@
+"""Path following of the navigation core, and the planting-column geometry (the one definition: the host's map
+tools import it too, so a map's target trees and the app's T_d agree).
+
+* FOLLOW_PATH flies the path F (waypoints) at ``cruiseSpeed`` with a carrot ``lookahead`` ahead of the
+  MAV's projection on the current segment, which also pulls it back onto the line. A waypoint is passed
+  within ``wpTolerance`` of it or once the MAV is past the end of its segment (a gust must not make it
+  circle back for a 3 cm ball).
+* A tree is in the planting column of a segment when its orthogonal distance to it is at most
+  ``columnFactor`` x ``crownSize`` (the paper: 1.5 crown sizes).
+"""
+import math
+
+COLUMN_FACTOR = 1.5  # paper: planting column half-width, in crown sizes
+
+
+def distance_to_segment(px, py, a, b):
+    """Horizontal distance from point (px, py) to the segment a-b (metres)."""
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    length2 = dx * dx + dy * dy
+    t = 0.0 if length2 == 0 else max(0.0, min(1.0, ((px - a[0]) * dx + (py - a[1]) * dy) / length2))
+    return math.hypot(px - a[0] - t * dx, py - a[1] - t * dy)
+
+
+def within_column(distance_m, crown_size_m, column_factor=COLUMN_FACTOR):
+    """The planting-column rule: a tree this far from the flown line is in the column."""
+    return distance_m <= column_factor * crown_size_m
+
+
+class PathFollower:
+    """The flight path F, the waypoint being flown to, and the follow law (world velocities)."""
+
+    def __init__(self, params, flight_path):
+        if len(flight_path) < 2:
+            raise ValueError("the flight path needs at least 2 waypoints")
+        self.params = params
+        self.path = tuple((float(x), float(y)) for x, y in flight_path)
+        self.waypoint_index = 0  # the waypoint being flown to
+
+    @property
+    def finished(self):
+        return self.waypoint_index >= len(self.path)
+
+    @property
+    def goal(self):
+        return self.path[self.waypoint_index]
+
+    def current_segment(self):
+        k = max(self.waypoint_index, 1)
+        k = min(k, len(self.path) - 1)
+        return self.path[k - 1], self.path[k]
+
+    def in_planting_column(self, x, y):
+        a, b = self.current_segment()
+        return within_column(distance_to_segment(x, y, a, b), self.params.crown_size_m, self.params.column_factor)
+
+    def cross_track(self, pose):
+        """Distance of the MAV from the current segment."""
+        a, b = self.current_segment()
+        return distance_to_segment(pose.x, pose.y, a, b)
+
+    def waypoint_reached(self, pose):
+        """Within ``waypoint_tolerance_m`` of the waypoint, or past the end of the segment towards it
+        (a gust can carry the MAV past a 3 cm ball; it must not then circle back for it)."""
+        goal = self.path[self.waypoint_index]
+        if math.hypot(goal[0] - pose.x, goal[1] - pose.y) < self.params.waypoint_tolerance_m:
+            return True
+        if self.waypoint_index == 0:
+            return False
+        a = self.path[self.waypoint_index - 1]
+        dx, dy = goal[0] - a[0], goal[1] - a[1]
+        return (pose.x - goal[0]) * dx + (pose.y - goal[1]) * dy >= 0.0
+
+    def follow_velocity(self, pose, goal):
+        """World velocity: towards a carrot on the current segment (or straight to the first waypoint)."""
+        p = self.params
+        if self.waypoint_index == 0:
+            carrot = goal
+        else:
+            a, b = self.path[self.waypoint_index - 1], goal
+            dx, dy = b[0] - a[0], b[1] - a[1]
+            length = math.hypot(dx, dy) or 1e-9
+            along = ((pose.x - a[0]) * dx + (pose.y - a[1]) * dy) / length
+            s = min(max(along, 0.0) + p.lookahead_m, length) / length
+            carrot = (a[0] + s * dx, a[1] + s * dy)
+        ex, ey = carrot[0] - pose.x, carrot[1] - pose.y
+        distance = math.hypot(ex, ey)
+        if distance < 1e-9:
+            return 0.0, 0.0
+        to_goal = math.hypot(goal[0] - pose.x, goal[1] - pose.y)
+        speed = min(p.cruise_speed, max(p.arrival_min_speed, to_goal))
+        return ex / distance * speed, ey / distance * speed

@@ -1,0 +1,208 @@
+"""Training examples of a detector model (steps 1-3 of host_tools.detection.training): the descriptors of
+positive windows (augmented), negative windows (look-alikes, shifted, wrongly sized, background), ready-made
+crops and hard negatives mined with the current model, and each imagery's colour model."""
+import cv2
+import numpy as np
+
+from host_tools.detection import dataset
+from host_tools.detection.svm import train_linear_svm
+
+import foranav_detector as detector_core
+import foranav_features as features
+
+SIZE_JITTER = 1.2  # positives drawn at crown x margin x [1/J, J]: covers the gaps between window sizes
+CENTRE_JITTER = 0.05  # of W, standard deviation (clipped at 2.5 sigma): a complete tree need not be centred
+POSITIVE_COPIES = 4  # augmented copies per tree
+SHIFTED_PER_TREE = 3
+LOOKALIKE_COPIES = 4  # windows per look-alike object (other species, roofs, road crossings)
+BACKGROUND_PER_FRAME = 6
+HARD_NEGATIVES_PER_FRAME = 10
+HARD_NEGATIVE_SCORE = -0.5  # windows scoring above this (and not a tree) are mined
+COLOUR_SVM_C = 0.1
+SURVEY_BACKGROUND_SCALE = (0.8, 1.25)  # survey background windows: the imagery's window size x this
+
+
+def colour_model(frames, species, margin, kind, templates, rng, survey):
+    """(colour vectors, bias) of one imagery: K templates (K = 1: the mean histogram of the crowns' colour
+    regions; more: seeded k-means of them), or a linear classifier of crowns against the imagery's other
+    windows (look-alikes, windows cutting a crown, background)."""
+    histograms = []
+    for frame, rows, cols in _windows(frames, margin, lambda label: label == species):
+        hue, sat = features.hs_histograms(features.colour_region(frame.hsv[rows, cols]))
+        histograms.append(np.concatenate([hue / hue.sum(), sat / sat.sum()]))
+    if not histograms:
+        raise ValueError("no complete '%s' trees whose window fits the frame" % species)
+    if kind == "templates" and (templates <= 1 or len(histograms) <= templates):
+        total = np.zeros(2 * features.HS_BINS)
+        for histogram in histograms:  # summed one by one in float64 (the mean is the same bytes every time)
+            total += histogram
+        return (total / len(histograms)).astype(np.float32)[None, :], 0.0
+    histograms = np.array(histograms, np.float64)
+    if kind == "templates":
+        return _kmeans(histograms, templates, rng).astype(np.float32), 0.0
+    positive = [features.colour_feature(*features.smoothed_hs(frame.hsv[rows, cols]))
+                for frame, rows, cols in _windows(frames, margin, lambda label: label == species)]
+    negative = []
+    for frame in frames:
+        for cx, cy, side in negative_windows(frame, species, margin, rng, survey):
+            rows, cols = dataset.pixel_window(frame, cx, cy, side)
+            negative.append(features.colour_feature(*features.smoothed_hs(frame.hsv[rows, cols])))
+    if not negative:
+        raise ValueError("a linear colour model needs other windows than trees in the imagery")
+    weights, bias = train_linear_svm(np.vstack([positive, negative]),
+                                     np.concatenate([np.ones(len(positive)), -np.ones(len(negative))]),
+                                     c=COLOUR_SVM_C, seed=int(rng.randint(1 << 30)))
+    return weights[None, :], bias
+
+
+def _kmeans(points, k, rng, iterations=25):
+    """Seeded k-means (k-means++ start) of histogram vectors -> (k, d) centres."""
+    centres = [points[rng.randint(len(points))]]
+    for _ in range(1, k):
+        distance = np.min([((points - c) ** 2).sum(axis=1) for c in centres], axis=0)
+        centres.append(points[rng.choice(len(points), p=distance / distance.sum())])
+    centres = np.array(centres)
+    for _ in range(iterations):
+        nearest = np.argmin([((points - c) ** 2).sum(axis=1) for c in centres], axis=0)
+        centres = np.array([points[nearest == j].mean(axis=0) if (nearest == j).any() else centres[j]
+                            for j in range(k)])
+    return centres
+
+
+def positive_descriptors(frames, species, margin, rng):
+    out = []
+    for frame in frames:
+        for box in frame.trees(species):
+            base = dataset.crown_size(box) * margin
+            for copy in range(POSITIVE_COPIES):
+                side = base * np.exp(rng.uniform(-np.log(SIZE_JITTER), np.log(SIZE_JITTER))) if copy else base
+                dx, dy = np.clip(rng.normal(0, CENTRE_JITTER, 2), -2.5 * CENTRE_JITTER, 2.5 * CENTRE_JITTER) * side
+                cx, cy = box.x_center + dx, box.y_center + dy
+                if side >= features.HOG_WINDOW and frame.window_fits(cx, cy, side):
+                    out.append(dataset.top_descriptor(frame, cx, cy, side, transform=rng.randint(8)))
+    return np.array(out, np.float32).reshape(-1, features.hog_descriptor_length())
+
+
+def crop_descriptors(crops, rng):
+    """Descriptors of crop images (each one window; positives in 4 of their 8 rotations/mirrors)."""
+    positives, negatives = [], []
+    for bgr, positive in crops:
+        value = cv2.extractChannel(features.bgr_to_hsv(bgr), 2)
+        small = cv2.resize(value, (features.HOG_WINDOW, features.HOG_WINDOW), interpolation=cv2.INTER_AREA)
+        for transform in (rng.permutation(8)[:4] if positive else [rng.randint(8)]):
+            turned = np.rot90(small, transform % 4)
+            turned = turned[:, ::-1] if transform >= 4 else turned
+            (positives if positive else negatives).append(features.top_layer_hog(np.ascontiguousarray(turned)))
+    length = features.hog_descriptor_length()
+    return (np.array(positives, np.float32).reshape(-1, length), np.array(negatives, np.float32).reshape(-1, length))
+
+
+def negative_descriptors(frames, species, margin, rng, survey=False):
+    out = []
+    for frame in frames:
+        for cx, cy, side in negative_windows(frame, species, margin, rng, survey):
+            out.append(dataset.top_descriptor(frame, cx, cy, side, transform=rng.randint(8)))
+    return np.array(out, np.float32).reshape(-1, features.hog_descriptor_length())
+
+
+def negative_windows(frame, species, margin, rng, survey=False):
+    """Negative windows of a frame. Survey imagery (survey=True): background at the imagery's crown scale
+    and only inside the annotated area (outside it, trees are not labelled)."""
+    windows = []
+    for box in frame.boxes:
+        if not box.label:
+            continue
+        base = dataset.crown_size(box) * margin
+        if box.label != species:  # look-alikes: the object framed like a tree would be
+            for _ in range(LOOKALIKE_COPIES):
+                windows.append((box.x_center, box.y_center, base * rng.uniform(0.85, 1.2)))
+            continue
+        angle = rng.uniform(0, 2 * np.pi)  # a near miss: sharpens the score peak on the crown centre
+        shift = rng.uniform(0.25, 0.35) * base
+        windows.append((box.x_center + shift * np.cos(angle), box.y_center + shift * np.sin(angle), base))
+        for _ in range(SHIFTED_PER_TREE):  # incomplete trees: the window cuts the crown
+            angle = rng.uniform(0, 2 * np.pi)
+            shift = rng.uniform(0.35, 0.6) * base
+            windows.append((box.x_center + shift * np.cos(angle), box.y_center + shift * np.sin(angle), base))
+        windows.append((box.x_center, box.y_center, base * rng.uniform(0.45, 0.6)))  # inside the crown
+        angle = rng.uniform(0, 2 * np.pi)  # most of the crown in a too small, off-centre window (as at an edge)
+        side, shift = base * rng.uniform(0.6, 0.72), rng.uniform(0.2, 0.3) * base
+        windows.append((box.x_center + shift * np.cos(angle), box.y_center + shift * np.sin(angle), side))
+        windows.append((box.x_center, box.y_center, base * rng.uniform(1.7, 2.2)))  # tree small in window
+    lo, hi = features.HOG_WINDOW * 2, min(frame.width, frame.height)
+    if survey:
+        lo = hi = frame.typical_crown() * margin
+    for _ in range(BACKGROUND_PER_FRAME):
+        if survey:
+            side = lo * rng.uniform(*SURVEY_BACKGROUND_SCALE)
+        else:
+            side = rng.uniform(lo, hi) if hi > lo else lo
+        windows.append((rng.uniform(side / 2, frame.width - side / 2), rng.uniform(side / 2, frame.height - side / 2),
+                        side))
+    return [(cx, cy, side) for cx, cy, side in windows
+            if side >= features.HOG_WINDOW and frame.window_fits(cx, cy, side)
+            and not dataset.is_tree_window(frame, species, cx, cy, side, margin, 0.18, 1.6)
+            and (not survey or frame.in_area(cx, cy))]
+
+
+def _windows(frames, margin, wanted):
+    """(frame, rows, cols) of the crown windows of complete boxes whose label is wanted."""
+    for frame in frames:
+        for box in frame.boxes:
+            if wanted(box.label) and frame.complete(box):
+                side = dataset.crown_size(box) * margin
+                if side >= features.HOG_WINDOW and frame.window_fits(box.x_center, box.y_center, side):
+                    rows, cols = dataset.pixel_window(frame, box.x_center, box.y_center, side)
+                    yield frame, rows, cols
+
+
+def survey_windows(frame, margin):
+    """Window sizes for mining a survey frame at its own crown scale: its crown sizes x margin, at most 3."""
+    sizes = sorted({max(features.HOG_WINDOW, int(round(dataset.crown_size(b) * margin)))
+                    for b in frame.boxes if b.label})
+    if len(sizes) > 3:
+        sizes = [sizes[len(sizes) // 10], sizes[len(sizes) // 2], sizes[(9 * len(sizes)) // 10]]
+    return tuple(s for s in sizes if s <= min(frame.width, frame.height))
+
+
+def hard_negatives(frames, species, model, rng, survey=False):
+    """Windows the current model scores above HARD_NEGATIVE_SCORE that are not trees of the species (survey
+    imagery: at the frame's crown scale, inside its annotated area). Vectorised over each score map: a
+    survey image holds hundreds of thousands of windows."""
+    out = []
+    for frame in frames:
+        windows = survey_windows(frame, model.window_margin) if survey else None
+        if survey and not windows:
+            continue
+        detector = detector_core.TreeDetector(model, detector_core.DetectorSettings(window_sizes=windows))
+        area = _area_mask(frame) if survey else None
+        found = []
+        for plan, scores in detector.score_maps(frame.value):
+            rows, cols = np.nonzero(scores > HARD_NEGATIVE_SCORE)
+            unit = plan.stride * plan.lattice / plan.scale  # as plan.window_origin
+            cx = cols * unit + plan.window / 2.0
+            cy = rows * unit + plan.window / 2.0
+            keep = ~dataset.tree_window_mask(frame, species, cx, cy, plan.window, model.window_margin, 0.25, 1.6)
+            if area is not None:
+                keep &= area[np.clip(cy.astype(int), 0, frame.height - 1), np.clip(cx.astype(int), 0, frame.width - 1)]
+            values = scores[rows, cols].astype(np.float64)
+            found.extend(zip(values[keep].tolist(), cx[keep].tolist(), cy[keep].tolist(),
+                             [plan.window] * int(keep.sum())))
+        if len(found) > HARD_NEGATIVES_PER_FRAME:
+            found.sort(key=lambda f: -f[0])
+            keep = found[:HARD_NEGATIVES_PER_FRAME // 2]
+            rest = found[HARD_NEGATIVES_PER_FRAME // 2:]
+            picks = rng.choice(len(rest), HARD_NEGATIVES_PER_FRAME - len(keep), replace=False)
+            found = keep + [rest[i] for i in sorted(picks)]
+        for _score, cx, cy, side in found:
+            out.append(dataset.top_descriptor(frame, cx, cy, side))
+    return np.array(out, np.float32).reshape(-1, features.hog_descriptor_length())
+
+
+def _area_mask(frame):
+    """Boolean image of the frame's annotated area (all False without labelled boxes)."""
+    mask = np.zeros((frame.height, frame.width), np.uint8)
+    area = frame.annotated_area()
+    if area is not None:
+        cv2.fillConvexPoly(mask, np.round(area.reshape(-1, 2)).astype(np.int32), 1)
+    return mask.astype(bool)

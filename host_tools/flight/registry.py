@@ -1,0 +1,92 @@
+"""The flight harness's registries and options: the cameras (``register_camera``, ``camera_factory``), the
+flight apps (``register_app``: the Python app and the C core, both reading the emulated UART2), and the
+flight options (``DEFAULT_OPTIONS``, checked by ``check_options``). Re-exported by ``host_tools.flight.harness``.
+"""
+import importlib
+
+from crazyflie_app.navigation import NavigationApp
+from crazyflie_app.uart2_link import Uart2Link
+from host_tools.errors import ForaNavError
+
+DEFAULT_OPTIONS = {
+    "dropout": 0.0, "hide_tree": None, "hide_s": 5.0, "hide_at_s": None, "silence": (), "garbage_rate": 0.0,
+    "partial_rate": 0.0, "lockstep": True, "max_time_s": 900.0, "model": None, "params": None, "start": None,
+    "mavlink": None, "decks": ("bcFlow2", "bcLoco"), "app": "python",
+}
+_CAMERAS = {}
+# cameras that live in their own module, imported on first use; the module calls register_camera()
+CAMERA_MODULES = {"sim": "host_tools.flight.vision_camera"}
+
+
+def register_camera(name, factory):
+    """Make ``foranav fly --camera NAME`` available: factory(pmap, seed=..., **kwargs) -> camera object."""
+    _CAMERAS[name] = factory
+
+
+def camera_factory(name):
+    """The factory registered for ``name``, importing its module first if it has one (see CAMERA_MODULES)."""
+    if name not in _CAMERAS and name in CAMERA_MODULES:
+        try:
+            importlib.import_module(CAMERA_MODULES[name])
+        except ModuleNotFoundError as err:
+            if err.name != CAMERA_MODULES[name]:
+                raise
+    if name not in _CAMERAS:
+        if name in CAMERA_MODULES:
+            raise ForaNavError("--camera %s: not available yet (needs the vision half: %s)"
+                               % (name, CAMERA_MODULES[name]))
+        raise ForaNavError("--camera %s: unknown camera (have %s)" % (name, ", ".join(sorted(_CAMERAS))))
+    return _CAMERAS[name]
+
+
+def check_options(options):
+    """``options`` merged over DEFAULT_OPTIONS, checked (ForaNavError names the bad one)."""
+    merged = dict(DEFAULT_OPTIONS)
+    for key, value in (options or {}).items():
+        if key not in DEFAULT_OPTIONS:
+            raise ForaNavError("flight option %r: unknown (known: %s)" % (key, ", ".join(sorted(DEFAULT_OPTIONS))))
+        merged[key] = value
+    for key in ("dropout", "garbage_rate", "partial_rate"):
+        if not 0.0 <= float(merged[key]) <= 1.0:
+            raise ForaNavError("flight option %s: must be a probability in [0, 1], got %r" % (key, merged[key]))
+    if float(merged["hide_s"]) < 0 or float(merged["max_time_s"]) <= 0:
+        raise ForaNavError("flight options hide_s / max_time_s must be positive")
+    return merged
+
+
+# -- the app: a component the flight is composed with -----------------------------------------------------------
+
+def _python_app(cf, waypoints, target_label):
+    return NavigationApp(cf, waypoints, None, link=Uart2Link(cf), target_label=target_label)
+
+
+def _c_app(cf, waypoints, target_label):
+    from crazyflie_app.c_app import CNavigationApp  # loads (and if stale, builds) the C core's shared library
+    return CNavigationApp(cf, waypoints, target_label=target_label)
+
+
+_APPS = {"python": _python_app, "c": _c_app}
+
+
+def register_app(name, factory):
+    """Make flight option ``app=NAME`` available.
+
+    ``factory(cf, waypoints, target_label) -> app``, ``cf`` with the camera's wire attached to its emulated
+    UART2 (``cf.attach_uart2``), which the app reads as the Bolt's deck port; the app registers its PARAM/LOG tables on
+    ``cf.registry`` and offers what the harness reads of the Python app: ``start()``, ``phase``,
+    ``target_x``/``target_y``, ``params`` (cam_offset_x_m, cam_offset_y_m, cam_width_px, cam_height_px,
+    focal_px), ``link`` (``close()``, ``lines_dropped``), ``core.counters`` (detections, out_of_column,
+    recoveries, abandoned, link_losses), ``core.link_aborted``; it emits the console events ``detection``,
+    ``tree_added``, ``tree_reached`` and ``phase``.
+    """
+    _APPS[name] = factory
+
+
+def app_names():
+    return sorted(_APPS)
+
+
+def app_factory(name):
+    if name not in _APPS:
+        raise ForaNavError("flight option app: unknown app %r (have %s)" % (name, ", ".join(app_names())))
+    return _APPS[name]
