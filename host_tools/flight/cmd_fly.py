@@ -91,16 +91,9 @@ def add_arguments(parser):
                         help="flight app: python (default) or c (the C core of crazyflie_app/bolt, as on the Bolt)")
 
 
-def _options(args):
-    if not 0.0 <= args.dropout <= 1.0:
-        raise ForaNavError("--dropout: must be in [0, 1], got %r" % args.dropout)
-    if args.hide_s < 0:
-        raise ForaNavError("--hide-s: must not be negative")
-    if args.wind < 0:
-        raise ForaNavError("--wind: must not be negative")
-    for name in ("garbage_rate", "partial_rate"):
-        if not 0.0 <= getattr(args, name) <= 1.0:
-            raise ForaNavError("--%s: must be in [0, 1], got %r" % (name.replace("_", "-"), getattr(args, name)))
+def flight_options(args):
+    """The harness options of parsed fly arguments (ranges are the argument types'; sweeps build their flights
+    with it)."""
     options = {"dropout": args.dropout, "model": {"estimator": args.estimator, "wind_gust_mps2": args.wind},
                "silence": [_window(text) for text in args.silence], "garbage_rate": args.garbage_rate,
                "partial_rate": args.partial_rate, "app": args.app}
@@ -123,34 +116,18 @@ def _window(text):
     return (start, duration)
 
 
-def _camera_kwargs(args):
-    kwargs = {}
-    if args.fps is not None:
-        if not args.fps > 0:
-            raise ForaNavError("--fps: must be a positive frame rate")
-        kwargs["frame_period_ms"] = int(round(1000.0 / args.fps))
-    if args.pixel_noise is not None:
-        if args.pixel_noise < 0:
-            raise ForaNavError("--pixel-noise: must not be negative")
-        kwargs["pixel_noise_px"] = args.pixel_noise
-    if args.latency_ms is not None:
-        if args.latency_ms < 0:
-            raise ForaNavError("--latency-ms: must not be negative")
-        kwargs["latency_ms"] = args.latency_ms
-    if args.cam_offset is not None:
-        kwargs["mount_offset"] = tuple(args.cam_offset)
-    return kwargs
-
-
-def flight_options(args):
-    """The harness options of parsed fly arguments (sweeps build their flights with it)."""
-    return _options(args)
-
-
 def camera_kwargs(args):
     """The camera factory's keyword arguments of parsed fly arguments, photo crowns and model included (sweeps
     build their flights with it; the species check against one map is run()'s)."""
-    kwargs = _camera_kwargs(args)
+    kwargs = {}
+    if args.fps is not None:
+        kwargs["frame_period_ms"] = int(round(1000.0 / args.fps))
+    if args.pixel_noise is not None:
+        kwargs["pixel_noise_px"] = args.pixel_noise
+    if args.latency_ms is not None:
+        kwargs["latency_ms"] = args.latency_ms
+    if args.cam_offset is not None:
+        kwargs["mount_offset"] = tuple(args.cam_offset)
     spec = appearance_spec_from_args(args)
     if not spec.default:
         kwargs["appearance"] = spec.to_dict()
@@ -198,7 +175,7 @@ def run(args):
     from host_tools.maps import load_map
 
     factory = camera_factory(args.camera)
-    options = _options(args)
+    options = flight_options(args)
     if args.kill_camera_at is not None and not args.realtime:
         raise ForaNavError("--kill-camera-at: only with --realtime (the camera is a process there)")
     if args.realtime and args.camera != "sim":
@@ -209,14 +186,10 @@ def run(args):
     if args.hide_tree is not None and args.hide_tree not in {tree.id for tree in pmap.trees}:
         raise ForaNavError("--hide-tree: map %s has no tree %d (its trees: %s)" % (
             args.map, args.hide_tree, ", ".join(str(tree.id) for tree in pmap.trees)))
-    kwargs = _camera_kwargs(args)
     spec, _ = appearance_from_args(args, {t.species for t in pmap.trees}, "map %s" % args.map)
     if (not spec.default or args.model is not None) and args.camera != "sim":
         raise ForaNavError("--crowns/--ground/--model: only with --camera sim (the oracle sees no pixels)")
-    if not spec.default:
-        kwargs["appearance"] = spec.to_dict()
-    if args.model is not None:
-        kwargs["model"] = model_option(args.model)
+    kwargs = camera_kwargs(args)
     if args.realtime:
         camera = None
     else:
