@@ -44,6 +44,12 @@ def atomic_path(path):
             os.unlink(tmp)
 
 
+def write_figure(figure, path, **savefig_options):
+    """A matplotlib figure written atomically, with no software/date stamp (same data, same bytes)."""
+    with atomic_path(path) as tmp:
+        figure.savefig(str(tmp), metadata={"Software": None}, **savefig_options)
+
+
 def write_bytes(path, data: bytes):
     with atomic_path(path) as tmp:
         tmp.write_bytes(data)

@@ -149,6 +149,5 @@ def _plot(per_imagery, path):
     axis.legend(fontsize=7)
     axis.set_title("Detections by score (operating point: the curve's end)")
     figure.tight_layout()
-    with fileio.atomic_path(path) as tmp:
-        figure.savefig(str(tmp), dpi=90, metadata={"Software": None})
+    fileio.write_figure(figure, path, dpi=90)
     plt.close(figure)

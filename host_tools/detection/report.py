@@ -130,6 +130,5 @@ def _plot(rows, path):
     axis.legend(fontsize=8)
     axis.set_title("Cue pass rates per imagery and label")
     figure.tight_layout()
-    with fileio.atomic_path(path) as tmp:
-        figure.savefig(str(tmp), dpi=90, metadata={"Software": None})
+    fileio.write_figure(figure, path, dpi=90)
     plt.close(figure)
