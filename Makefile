@@ -41,7 +41,8 @@ capp-asan: build/libforanav_nav_asan.so
 	LD_PRELOAD="$$(gcc -print-file-name=libasan.so) $$(gcc -print-file-name=libubsan.so)" \
 	ASAN_OPTIONS=detect_leaks=0:abort_on_error=1 UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 PYTHONMALLOC=malloc \
 	$(BIN)/python -m pytest -q -p no:cacheprovider -m "$(CAPP_ASAN_MARK)" \
-		tests/test_capp_differential.py tests/test_capp_app.py tests/test_cf_firmware_uart2.py
+		tests/crazyflie_app/bolt/test_differential_c_vs_python.py tests/crazyflie_app/bolt/test_c_app.py \
+		tests/crazyflie_app/firmware/test_uart2.py
 
 bolt:
 	@test -n "$(CRAZYFLIE_BASE)" || { echo "usage: make bolt CRAZYFLIE_BASE=/path/to/crazyflie-firmware"; exit 2; }
@@ -57,7 +58,8 @@ test: $(STAMP) capp camera-runtime
 	$(BIN)/python -m pytest -q
 
 # The camera's own runtime (Python 3.7 + numpy 1.16.6 + OpenCV 4.10) in .venv-camera/, built once from the
-# machine's Python 3.7 (a stamp file inside makes a second run a no-op); tests/test_camera_runtime.py uses it.
+# machine's Python 3.7 (a stamp file inside makes a second run a no-op); tests/cross_cutting/test_camera_runtime.py
+# uses it.
 camera-runtime: $(STAMP)
 	$(BIN)/python -m host_tools.jevois_host.camera_runtime build
 

@@ -30,19 +30,19 @@ The C app's known weaknesses and what this port does about each (tests named in 
 
 * **Out-of-bounds covariance terms** (``P`` is ``float[2][2]`` but ``P[2][2]``, ``P[3][3]`` are used): the filter
   keeps the full 4x4 covariance of ``[u, v, du, dv]`` with a Joseph-form update, so P stays symmetric
-  positive definite [test_cf_kalman: the covariance is the full 4x4 matrix ...].
+  positive definite [test_pixel_kalman: the covariance is the full 4x4 matrix ...].
 * **Filter on a wrong time base** (dt = 0.001 per 10 ms loop): the filter is predicted every control tick
   with the tick's real duration in seconds, and detections are shifted by the MAV's motion since capture
-  [test_cf_kalman: prediction runs in real seconds ...].
+  [test_pixel_kalman: prediction runs in real seconds ...].
 * **Dead return-to-path branch** (``checkReturnToPath`` could only ever be true): RETURN_TO_PATH is a real
   phase entered after every tree, left when the cross-track error is below ``returnTol``
-  [test_cf_core: return to path runs after a tree ...].
+  [test_navigation_core: return to path runs after a tree ...].
 * **Stale target index after removal** (``KalmantreeNum`` indexed an array that ``removeCoordinate``
   shifted): trees are keyed by stable ids; removing or evicting a tree never retargets another one
-  [test_cf_tree_memory: ids stay valid ...; test_cf_core: the target survives the removal ...].
+  [test_tree_memory: ids stay valid ...; test_navigation_core: the target survives the removal ...].
 * **Unbounded visited list** (``treeBlacklist[10]`` overflowed on the 11th tree) and the silent 10-tree cap:
   both collections have PARAM capacities; overflow evicts the farthest entry and is counted in LOG
-  variables (``app.evicted``, ``app.forgotten``) and printed, never silent [test_cf_tree_memory: the
+  variables (``app.evicted``, ``app.forgotten``) and printed, never silent [test_tree_memory: the
   visited list is bounded ...; a full memory evicts the farthest tree ...].
 
 Also changed from the C app: ids of log/param variables are looked up once, not on every call;

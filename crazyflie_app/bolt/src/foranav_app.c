@@ -10,7 +10,7 @@
  * them to the core's line assembler and parser. The two tasks share the core under a mutex.
  *
  * PARAM_GROUP(app) and LOG_GROUP(app) have the names, types and units of the Python app's tables
- * (tests/test_capp_build.py checks it); the console lines are the Python app's (navFormatEvent).
+ * (tests/crazyflie_app/bolt/test_build.py checks it); the console lines are the Python app's (navFormatEvent).
  */
 #include <math.h>
 #include <stdbool.h>

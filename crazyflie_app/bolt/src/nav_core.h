@@ -6,7 +6,7 @@
  * Pure: no firmware call, no clock, no file-level static state. Everything one flight needs lives in one
  * NavCore struct passed in, so one process can fly many flights (the host tests do) and the firmware adapter
  * (foranav_app.c) owns exactly one. All arithmetic is in double, like the Python port, so the differential
- * test (tests/test_capp_differential.py) can hold both cores to 1e-9.
+ * test (tests/crazyflie_app/bolt/test_differential_c_vs_python.py) can hold both cores to 1e-9.
  *
  * Capacities are compiled in (no malloc on the Bolt): the PARAMs app.treeCapacity and app.visitedCap are
  * clamped to NAV_MAX_TREES and NAV_MAX_VISITED; a camera frame keeps at most NAV_MAX_FRAME_DETECTIONS

@@ -6,21 +6,13 @@ import pytest
 from crazyflie_app.firmware import (COMMANDER_PRIORITY_CRTP, COMMANDER_PRIORITY_EXTRX,
                                     COMMANDER_PRIORITY_HIGHLEVEL, Crazyflie, FirmwareAssertError,
                                     LOG_VARID_INVALID, MavModelConfig, PARAM_VARID_INVALID, PORT_MAX_DELAY,
-                                    modeAbs, modeVelocity, setpoint_t, v_task_delay)
+                                    modeAbs, setpoint_t, v_task_delay)
 from crazyflie_app.firmware.freertos import Scheduler
 from crazyflie_app.firmware.mav_model import MavModel
 from crazyflie_app.firmware.supervisor import FLYING, LANDED, LOCKED, WARNING_LEVEL_OUT
 
-HEIGHT = 1.0
-HEIGHT_TOLERANCE = 0.05
+from .conftest import HEIGHT, HEIGHT_TOLERANCE, hover
 
-
-def hover(sp, vx=0.0, vy=0.0, z=HEIGHT):
-    sp.mode.x = sp.mode.y = modeVelocity
-    sp.mode.z = sp.mode.yaw = modeAbs
-    sp.velocity.x, sp.velocity.y, sp.position.z = vx, vy, z
-    sp.velocity_body = True
-    return sp
 
 
 def armed_crazyflie(**kwargs):

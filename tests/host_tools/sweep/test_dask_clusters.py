@@ -16,8 +16,9 @@ import pytest
 from host_tools.sweep.runner import fly_task
 from host_tools.sweep.specs import flight_spec
 from host_tools.plantation import PlantationRanges
+from tests.conftest import REPO_ROOT
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = REPO_ROOT
 DASK = Path(sys.executable).with_name("dask")
 SMALL = ["--columns", "1", "--column-length-m", "1.2:1.5"]
 SMALL_RANGES = PlantationRanges(columns=(1, 1), column_length_m=(1.2, 1.5))

@@ -1,20 +1,19 @@
 """foranav replay: the committed clips through the module, the pty and the app (open loop), compared with the
 stored expectations (tests/fixtures/replay_expectations/, tolerances stated in each file)."""
 import json
-from pathlib import Path
 
 import pytest
 
 from host_tools import cli
 from host_tools.flight.replay import expectation_record, replay_clip
 from host_tools.sim.clip import read_clip
+from tests.conftest import FIXTURES, MAP3_SHORT_SENSOR_CLIP, REPO_ROOT
 
-ROOT = Path(__file__).resolve().parent
-EXPECTATIONS = sorted((ROOT / "fixtures" / "replay_expectations").glob("*.json"))
+EXPECTATIONS = sorted((FIXTURES / "replay_expectations").glob("*.json"))
 
 
 def test_that_every_committed_clip_has_expectations():
-    clips = {p.name for p in (ROOT / "fixtures" / "clips").iterdir() if p.is_dir()}
+    clips = {p.name for p in (FIXTURES / "clips").iterdir() if p.is_dir()}
     assert clips and clips == {p.stem for p in EXPECTATIONS}
 
 
@@ -22,7 +21,7 @@ def test_that_every_committed_clip_has_expectations():
 def test_that_a_replay_matches_its_expectations(path):
     spec = json.loads(path.read_text())
     expected, tol = spec["expected"], spec["tolerance_values"]
-    report = replay_clip(read_clip(ROOT.parent / spec["clip"]))
+    report = replay_clip(read_clip(REPO_ROOT / spec["clip"]))
     got = expectation_record(report)
     assert got["frames"] == expected["frames"]
     assert abs(got["recall"] - expected["recall"]) <= tol["recall"]
@@ -37,7 +36,7 @@ def test_that_a_replay_matches_its_expectations(path):
 
 
 def test_that_replay_without_a_map_fails_in_one_line(tmp_path, capsys):
-    clip_dir = ROOT / "fixtures" / "clips" / "map3_short_sensor"
+    clip_dir = MAP3_SHORT_SENSOR_CLIP
     sidecar = json.loads((clip_dir / "clip.json").read_text())
     sidecar["map"] = None
     sidecar["video"] = str(clip_dir / "clip.avi")

@@ -1,43 +1,25 @@
 """`foranav deploy` on a fake JEVOIS partition: fresh and repeated deploys, user lines and backups, dry run,
 refusals (bad PATH, bad module), headless boot, mode changes."""
-import hashlib
 import subprocess
 import sys
 
 import pytest
 
 from host_tools import cli
-from host_tools.deploy import card_fs, module_files
+from host_tools.deploy import card, card_fs, module_files
 from host_tools.deploy.videomappings import parse_mappings
-from test_deploy_fixtures import HELPER_SOURCE, USER_INITSCRIPT, USER_VIDEOMAPPINGS, make_card, make_module_folder
 
-MODULE = "modules/ForaNav/ForaNavTrees"
+from .conftest import (BAD_INPUT_EXIT, HELPER_SOURCE, MODULE, USER_INITSCRIPT, USER_VIDEOMAPPINGS, deploy, make_card,
+                       make_module_folder, tree_digest)
+
 USB_LINE = "YUYV 352 288 15.0 YUYV 352 288 15.0 ForaNav ForaNavTrees"
 NONE_LINE = "NONE 0 0 0.0 YUYV 352 288 15.0 ForaNav ForaNavTrees"
 HEADLESS_COMMANDS = ["setmapping2 YUYV 352 288 15.0 ForaNav ForaNavTrees", "setpar serlog None",
                      "setpar serout Hard", "streamon"]
-BAD_INPUT_EXIT = 2
-
-
-def tree_digest(root):
-    """One hash of every file's path and bytes under root."""
-    digest = hashlib.sha256()
-    for path in sorted(p for p in root.rglob("*") if p.is_file()):
-        digest.update(str(path.relative_to(root)).encode() + b"\0" + path.read_bytes() + b"\0")
-    return digest.hexdigest()
-
-
-def deploy(sd, module_dir, *extra):
-    return cli.main(["deploy", "--sd", str(sd), "--module-dir", str(module_dir)] + list(extra))
 
 
 def read(sd, relative):
     return (sd / relative).read_text()
-
-
-@pytest.fixture
-def card_and_module(tmp_path):
-    return make_card(tmp_path), make_module_folder(tmp_path / "src")
 
 
 def test_that_a_fresh_deploy_installs_the_module_files_and_nothing_host_only(card_and_module):
@@ -334,3 +316,15 @@ def test_that_rewritten_files_keep_their_permissions_and_new_ones_are_world_read
     deploy(sd, module_dir)
     assert (sd / "config" / "videomappings.cfg").stat().st_mode & 0o777 == 0o664
     assert (sd / MODULE / "ForaNavTrees.py").stat().st_mode & 0o777 == 0o644
+
+
+def test_that_the_fake_card_reads_like_a_jevois_partition(tmp_path):
+    # Fixture
+    sd = make_card(tmp_path)
+    # Test
+    state = card.read_card(sd, "ForaNav", "ForaNavTrees")
+    # Assert
+    assert set(state.files) == {card.VIDEOMAPPINGS, card.INITSCRIPT}
+    assert "config/params.cfg" in state.names
+    assert [m.module for m in parse_mappings(USER_VIDEOMAPPINGS)] == [
+        "DNN", "SaveVideo", "SaveVideo", "JeVoisIntro", "JeVoisIntro"]

@@ -15,9 +15,9 @@ from host_tools.maps import load_map
 from host_tools.sim.camera import CameraModel, Pose
 from host_tools.sim.world import SENSOR_EFFECTS, World
 from jevois_module.ForaNavTrees import foranav_serial
+from tests.conftest import REPO_ROOT
 
 HELPERS = sorted(f[:-3] for f in os.listdir(DEFAULT_MODULE_DIR) if f.startswith("foranav_") and f.endswith(".py"))
-REPO_ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SUBPROCESS_TIMEOUT_S = 120
 # Probe module: reports what the bindings tell it, so that state carried over from an earlier run shows up
 PROBE_SOURCE = '''

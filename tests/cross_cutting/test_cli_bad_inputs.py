@@ -24,8 +24,9 @@ from host_tools.annotations import read_boxes
 from host_tools.errors import ForaNavError
 from host_tools.maps import map_from_dict
 from host_tools.sim.clip import clip_from_dict, read_clip
+from tests.conftest import MAP3_SHORT_SENSOR_CLIP
 
-FIXTURE_CLIP = Path(__file__).parent / "fixtures" / "clips" / "map3_short_sensor"
+FIXTURE_CLIP = MAP3_SHORT_SENSOR_CLIP
 OLD_BYTES = b"an output from an earlier run\n"
 CSV_HEADER = "image,x_center,y_center,width,height,label\n"
 FIELD_LIMIT = 128 * 1024  # csv.field_size_limit() default

@@ -1,12 +1,11 @@
 """The committed CI clips decode and their ground truth agrees with the camera model and the map."""
-from pathlib import Path
-
 import pytest
 
 from host_tools.maps import map_from_dict
 from host_tools.sim.clip import read_clip
+from tests.conftest import FIXTURES
 
-CLIPS = Path(__file__).parent / "fixtures" / "clips"
+CLIPS = FIXTURES / "clips"
 PIXEL_TOLERANCE = 0.01  # sidecar values are rounded to 1e-4
 
 

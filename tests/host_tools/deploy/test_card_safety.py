@@ -8,29 +8,19 @@ import sys
 
 import pytest
 
-from host_tools import cli
 from host_tools.deploy import card, card_fs
 from host_tools.errors import ForaNavError
-from test_deploy_card import BAD_INPUT_EXIT, MODULE, tree_digest
-from test_deploy_fixtures import USER_VIDEOMAPPINGS, make_card, make_module_folder
+
+from .conftest import BAD_INPUT_EXIT, MODULE, USER_VIDEOMAPPINGS, deploy, make_card, make_module_folder, tree_digest
 
 VIDEOMAPPINGS = "config/videomappings.cfg"
 KILL_TIMEOUT_S = 120
-
-
-def deploy(sd, module_dir, *extra):
-    return cli.main(["deploy", "--sd", str(sd), "--module-dir", str(module_dir)] + list(extra))
 
 
 def one_error_line(capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1, err
     return err[0]
-
-
-@pytest.fixture
-def card_and_module(tmp_path):
-    return make_card(tmp_path), make_module_folder(tmp_path / "src")
 
 
 def test_that_a_write_protected_videomappings_cfg_is_refused_with_one_line_and_nothing_written(card_and_module,

@@ -1,11 +1,10 @@
 """The closed-loop commands as a user runs them: demo, replay (table), paper-tests argument errors."""
-from pathlib import Path
-
 from host_tools import cli
 from host_tools.demo import progress_line
 from host_tools.flight.paper_tests import criteria, table
+from tests.conftest import MAP3_SHORT_SENSOR_CLIP
 
-CLIP = Path(__file__).resolve().parent / "fixtures" / "clips" / "map3_short_sensor"
+CLIP = MAP3_SHORT_SENSOR_CLIP
 
 
 def test_that_the_demo_flies_map1_and_says_where_the_outputs_are(tmp_path, capsys):

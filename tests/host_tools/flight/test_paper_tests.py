@@ -2,12 +2,12 @@
 (rendered frames -> JeVois module -> pty -> Crazyflie app), each meeting the paper's criteria: every target
 reached exactly once, no non-target visited, mean deviation <= 0.10 m. Runs in CI (~1 min on 2 cores)."""
 import json
-from pathlib import Path
 
 from host_tools import cli
 from host_tools.flight.paper_tests import MAX_MEAN_DEVIATION_M, PaperTest, criteria, run_tests
+from tests.conftest import FIXTURES
 
-UNSEEN_MAP = Path(__file__).resolve().parent / "fixtures" / "maps" / "unseen_three_columns.json"
+UNSEEN_MAP = FIXTURES / "maps" / "unseen_three_columns.json"
 
 
 def _failures(results):

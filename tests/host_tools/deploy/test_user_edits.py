@@ -2,9 +2,7 @@
 script.cfg commands; ForaNav's own lines are recomputed; refused and obsolete settings are handled visibly."""
 import pytest
 
-from host_tools import cli
-from test_deploy_card import BAD_INPUT_EXIT, MODULE, tree_digest
-from test_deploy_fixtures import MODULE_SOURCE, make_card, make_module_folder
+from .conftest import BAD_INPUT_EXIT, MODULE, MODULE_SOURCE, deploy, make_card, make_module_folder, tree_digest
 
 PARAMS = MODULE + "/params.cfg"
 SCRIPT = MODULE + "/script.cfg"
@@ -17,10 +15,6 @@ def check_step(value):
     if not 1 <= value <= 24:
         raise ValueError("step out of range (1 to 24)")
 '''
-
-
-def deploy(sd, module_dir, *extra):
-    return cli.main(["deploy", "--sd", str(sd), "--module-dir", str(module_dir)] + list(extra))
 
 
 def active_lines(path):

@@ -1,15 +1,18 @@
-"""Fake JEVOIS partitions and fake module folders for the deploy tests (built in tmp_path), and a check that the
-fake card looks like the real one to the deploy code."""
+"""What the deploy tests share: fake JEVOIS partitions and fake module folders (built in tmp_path), and a digest of
+a folder tree to show that a refused deploy changed nothing."""
+import hashlib
 import io
 import textwrap
 import zipfile
 
 import numpy as np
+import pytest
 
-from host_tools.deploy import card
-from host_tools.deploy.videomappings import parse_mappings
+from host_tools import cli
 
 FIXED_ZIP_TIME = (2024, 1, 1, 0, 0, 0)
+MODULE = "modules/ForaNav/ForaNavTrees"  # where deploy puts the module on the card
+BAD_INPUT_EXIT = 2
 
 # An excerpt of a real JeVois-A33 videomappings.cfg: comments, blank lines, a commented-out mapping, a mapping with
 # a trailing comment and relative USB size, the single default (*), a NONE mapping, and a USB mode that clashes
@@ -113,13 +116,20 @@ def make_card(root, videomappings=USER_VIDEOMAPPINGS, initscript=USER_INITSCRIPT
     return sd
 
 
-def test_that_the_fake_card_reads_like_a_jevois_partition(tmp_path):
-    # Fixture
-    sd = make_card(tmp_path)
-    # Test
-    state = card.read_card(sd, "ForaNav", "ForaNavTrees")
-    # Assert
-    assert set(state.files) == {card.VIDEOMAPPINGS, card.INITSCRIPT}
-    assert "config/params.cfg" in state.names
-    assert [m.module for m in parse_mappings(USER_VIDEOMAPPINGS)] == [
-        "DNN", "SaveVideo", "SaveVideo", "JeVoisIntro", "JeVoisIntro"]
+def tree_digest(root):
+    """One hash of every file's path and bytes under root."""
+    digest = hashlib.sha256()
+    for path in sorted(p for p in root.rglob("*") if p.is_file()):
+        digest.update(str(path.relative_to(root)).encode() + b"\0" + path.read_bytes() + b"\0")
+    return digest.hexdigest()
+
+
+def deploy(sd, module_dir, *extra):
+    """``foranav deploy`` in-process; returns its exit status."""
+    return cli.main(["deploy", "--sd", str(sd), "--module-dir", str(module_dir)] + list(extra))
+
+
+@pytest.fixture
+def card_and_module(tmp_path):
+    """A fake card and a fake module folder to deploy onto it."""
+    return make_card(tmp_path), make_module_folder(tmp_path / "src")

@@ -3,20 +3,11 @@ and the firmware's disarm timeouts apply (30 s armed on the ground, 3 s landed).
 import pytest
 
 from crazyflie_app.firmware import COMMANDER_PRIORITY_EXTRX, PORT_MAX_DELAY, Crazyflie, setpoint_t, v_task_delay
-from crazyflie_app.firmware.commander import modeAbs, modeVelocity
 from crazyflie_app.firmware.supervisor import (FLYING, LANDED, LANDING_TIMEOUT_MS, LOCKED, PRE_FLIGHT,
                                                PREFLIGHT_TIMEOUT_MS, READY_TO_FLY)
 
-HEIGHT = 1.0
-HEIGHT_TOLERANCE = 0.05
+from .conftest import HEIGHT, HEIGHT_TOLERANCE, hover
 
-
-def hover(sp, z=HEIGHT):
-    sp.mode.x = sp.mode.y = modeVelocity
-    sp.mode.z = sp.mode.yaw = modeAbs
-    sp.velocity.x, sp.velocity.y, sp.position.z = 0.0, 0.0, z
-    sp.velocity_body = True
-    return sp
 
 
 def hover_app(cf, arm_at_ms=None, start_ms=0, stop_ms=None, land_ms=None):

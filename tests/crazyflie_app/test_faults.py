@@ -5,7 +5,6 @@ twice in one frame is one tree."""
 import json
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
 
@@ -18,12 +17,15 @@ from crazyflie_app.tree_memory import TreeMemory
 from host_tools.flight import camera_factory, run_flight
 from host_tools.maps import load_map
 from jevois_module.ForaNavTrees import foranav_serial as fs
+from tests.conftest import FIXTURES
+
+from .conftest import console_text
 
 PATH = ((0.0, 0.0), (3.0, 0.0))
 BOOTED_MS = BOOT_DELAY_MS + 10
 AIRBORNE_M = 0.1  # above this the MAV has left the ground
 FRAME_MS = 111
-FAULT_MAPS = Path(__file__).resolve().parent / "fixtures" / "faults"  # maps of docs/faults.md
+FAULT_MAPS = FIXTURES / "faults"  # maps of docs/faults.md
 
 
 def make_app(**params):
@@ -33,10 +35,6 @@ def make_app(**params):
         cf.registry.param_set("app." + name, value)
     app.start()
     return cf, app
-
-
-def console_text(cf):
-    return [text for _, _, text in cf.console.lines]
 
 
 def camera_task(app, frame_lines, period_ms=FRAME_MS):

@@ -6,7 +6,6 @@ import random
 import re
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
 
@@ -21,8 +20,11 @@ from host_tools.flight.oracle import OracleCamera
 from host_tools.flight.wire import PtyWire
 from host_tools.maps import load_map
 from jevois_module.ForaNavTrees import foranav_serial as fs
+from tests.conftest import MAP3_SHORT_SENSOR_CLIP, REPO_ROOT
 
-REPO = Path(__file__).resolve().parents[1]
+from ..conftest import console_text as console
+
+REPO = REPO_ROOT
 APP_SOURCE = REPO / "crazyflie_app" / "bolt" / "src" / "foranav_app.c"
 PATH = ((0.0, 0.0), (3.0, 0.0))
 MAX_MEAN_DEVIATION_M = 0.05
@@ -53,10 +55,6 @@ def empty_frames(wire, period_ms=100):
     while True:
         wire.write(fs.FRAME_STOP.encode() + b"\r\n")
         yield v_task_delay(period_ms)
-
-
-def console(cf):
-    return [text for _, _, text in cf.console.lines]
 
 
 def test_that_without_a_flow_deck_the_c_app_stops_and_never_commands(wired_cf):
@@ -221,7 +219,7 @@ def test_that_a_replay_with_the_c_app_reports_what_the_python_app_does():
     from host_tools.flight.replay import expectation_record, replay_clip
     from host_tools.sim.clip import read_clip
 
-    clip = read_clip(REPO / "tests" / "fixtures" / "clips" / "map3_short_sensor")
+    clip = read_clip(MAP3_SHORT_SENSOR_CLIP)
     python, c = replay_clip(clip), replay_clip(clip, app="c")
     assert expectation_record(c) == expectation_record(python)
     assert c["setpoints"] == python["setpoints"] and c["tree_map"] == python["tree_map"]

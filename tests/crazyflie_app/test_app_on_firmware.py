@@ -8,6 +8,8 @@ from crazyflie_app.navigation import (BOOT_DELAY_MS, LOG_TABLE, PARAM_TABLE, PRE
 from crazyflie_app.navigation_core import PHASE_FOLLOW_PATH, PHASE_NO_DECK, PHASE_TAKEOFF
 from jevois_module.ForaNavTrees import foranav_serial as fs
 
+from .conftest import console_text
+
 PATH = ((0.0, 0.0), (3.0, 0.0))
 ALTITUDE_TOLERANCE = 0.05
 BOOTED_MS = BOOT_DELAY_MS + 10
@@ -32,10 +34,6 @@ def empty_frames(app):
         if app.link.port is not None:
             app.link.port.write(b"MARK START\r\nMARK STOP\r\n")
         yield v_task_delay(CAMERA_FRAME_MS)
-
-
-def console_text(cf):
-    return [text for _, _, text in cf.console.lines]
 
 
 def test_that_without_a_flow_deck_the_app_stops_and_never_commands():

@@ -14,12 +14,11 @@ from host_tools import cli
 from host_tools.deploy import module_files, package
 from host_tools.deploy.modes import parse_mode
 from host_tools.deploy.videomappings import plan_videomappings
-from test_deploy_fixtures import USER_VIDEOMAPPINGS, make_card, make_module_folder
 
-MODULE = "modules/ForaNav/ForaNavTrees"
+from .conftest import BAD_INPUT_EXIT, MODULE, USER_VIDEOMAPPINGS, make_card, make_module_folder
+
 EXPECTED_FILES = ["ForaNavTrees.py", "foranav_helper.py", "foranav_oil_palm.npz", "params.cfg", "postinstall",
                   "script.cfg"]
-BAD_INPUT_EXIT = 2
 POSTINSTALL_TIMEOUT_S = 30
 
 needs_shell_tools = pytest.mark.skipif(not all(shutil.which(tool) for tool in ("sh", "awk", "tail", "tar", "bzcat")),

@@ -7,8 +7,8 @@ from host_tools.deploy import module_files
 from host_tools.deploy.modes import parse_mode
 from host_tools.deploy.module_probe import probe_module
 from host_tools.errors import ForaNavError
-from test_deploy_card import BAD_INPUT_EXIT, MODULE, tree_digest
-from test_deploy_fixtures import MODULE_SOURCE, make_card, make_module_folder
+
+from .conftest import BAD_INPUT_EXIT, MODULE, MODULE_SOURCE, make_card, make_module_folder, tree_digest
 
 def patched(source, old, new):
     assert old in source
