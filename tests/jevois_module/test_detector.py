@@ -161,5 +161,5 @@ def test_that_a_window_centred_inside_an_accepted_crown_is_the_same_tree_but_a_n
     side_window = (-0.7, 150.0, 145.0, 96.0)  # 45 px off the crown centre
     neighbour = (-0.7, 150.0 + 129.0, 100.0, 168.0)  # one crown diameter away
     assert detector_core._iou(side_window, (1.2, 150.0, 100.0, 168.0)) < detector_core.DEFAULT_NMS_OVERLAP
-    assert detector_core._inside_a_crown(side_window, accepted)
-    assert not detector_core._inside_a_crown(neighbour, accepted)
+    assert detector_core._inside_a_crown(side_window, accepted, 1.3)
+    assert not detector_core._inside_a_crown(neighbour, accepted, 1.3)
