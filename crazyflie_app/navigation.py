@@ -348,8 +348,8 @@ PARAM_TABLE = param_group("app", [
     param_add(PARAM_FLOAT, "mergeRadius", "merge_radius_m", "m",
               "detections this close to a stored tree are the same tree (Navigation.c: 0.45 m)"),
     param_add(PARAM_FLOAT, "dupRadius", "duplicate_radius_m", "m",
-              "detections of one frame this close are one crown seen twice and merged (trees stand >= a crown "
-              "apart)"),
+              "detections of one frame this close are one crown seen twice and merged, and a stored tree this "
+              "close to a reached one is that tree (trees stand >= a crown apart)"),
     param_add(PARAM_FLOAT, "crownSize", "crown_size_m", "m", "crown size of a mature tree (planting column)"),
     param_add(PARAM_FLOAT, "columnFactor", "column_factor", "",
               "planting column half-width in crown sizes (paper: 1.5)"),

@@ -9,7 +9,8 @@
   flagged in the visited list. At the last waypoint, before landing, the app goes back to each flagged
   tree in turn (nearest first): the entry is restored into T_d as the target and approached by memory
   (RECOVERY, whose timeouts start only once the MAV is within ``returnTolerance`` of s_t), then visually.
-  Reached or abandoned again, it is never flagged again; when no flagged tree is left, LAND.
+  Reached or abandoned again, it is never flagged again; when no flagged tree is left, LAND. A flagged tree
+  within ``dupRadius`` of a reached one was that tree (tree_memory) and is not gone back for.
 """
 import math
 
@@ -66,7 +67,8 @@ class Recovery:
     def start_revisit(self, t_ms, memory, ground_point, mav_xy, centre, events):
         """Going back once: restore the flagged tree nearest to ``ground_point`` into T_d (``memory``) as the
         target, at the principal point ``centre``. Returns it, or None if no tree is flagged."""
-        flagged = [e for e in memory.visited if e.revisit]
+        flagged = [e for e in memory.visited
+                   if e.revisit and not memory.near_reached(e, self.params.duplicate_radius_m)]
         if not flagged:
             return None
         entry = nearest(flagged, ground_point)

@@ -16,6 +16,11 @@ nearest stored *or visited* tree within the merge radius, and no two detections 
 tree (two trees seen together are two trees, even 0.47 m apart in a cluster). One crown seen twice in one
 frame (two detector windows closer than ``app.dupRadius``) is merged by the core before association
 (``camera_geometry.merge_duplicates``).
+
+A stored tree whose position comes within ``app.dupRadius`` of a tree already reached is that tree, seen
+again from a drifted estimate (flow) or through an off-centre window on a crown cut by the frame edge: it
+is dropped from T_d (``absorb_reached``, counted in ``absorbed``) instead of being approached and reached a
+second time, and an abandoned tree within that distance of a reached one is not gone back for.
 """
 import math
 from dataclasses import dataclass
@@ -56,6 +61,7 @@ class TreeMemory(object):
         self.evicted = 0
         self.unstored = 0  # new trees not stored: T_d full of trees seen in the same frame
         self.visited_forgotten = 0
+        self.absorbed = 0  # stored trees dropped as a reached tree seen again
         self._next_id = 1
 
     def __len__(self):
@@ -120,6 +126,24 @@ class TreeMemory(object):
         t.x += weight * (x - t.x)
         t.y += weight * (y - t.y)
         t.last_ms, t.u, t.v = t_ms, u, v
+
+    def absorb_reached(self, radius):
+        """Drop every stored tree within ``radius`` of a reached visited entry (the same tree seen again);
+        returns [(dropped id, reached id)]."""
+        dropped = []
+        reached = [e for e in self.visited if e.reached]
+        for t in list(self.trees.values()):
+            twin = next((e for e in reached if math.hypot(t.x - e.x, t.y - e.y) <= radius), None)
+            if twin is not None:
+                del self.trees[t.id]
+                self.absorbed += 1
+                dropped.append((t.id, twin.id))
+        return dropped
+
+    def near_reached(self, entry, radius):
+        """True when a reached visited entry lies within ``radius`` of ``entry`` (x, y)."""
+        return any(e.reached and e is not entry and math.hypot(entry.x - e.x, entry.y - e.y) <= radius
+                   for e in self.visited)
 
     def mark_visited(self, tree_id, t_ms, mav_xy, reached=True, revisit=False):
         """Move a tree from T_d to the visited list (reached, or abandoned when reached is False; ``revisit``

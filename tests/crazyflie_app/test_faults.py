@@ -256,6 +256,23 @@ def test_that_the_revisit_goes_to_the_tree_and_its_timeout_starts_there():
     assert core.phase == PHASE_LAND and not core.memory.visited[-1].revisit
 
 
+def test_that_an_abandoned_tree_next_to_a_reached_one_is_not_gone_back_for():
+    # sweep flight m7 (flow estimator): one crown stored twice 0.15 m apart, one copy abandoned unseen, the
+    # other reached; going back for the abandoned copy reached the same tree a second time
+    core, t, pose = _flying_core()
+    abandoned, _ = core.memory.add(1.265, 5.0, t, 176.0, 144.0, (0.0, 0.0))
+    core.memory.mark_visited(abandoned, t, (0.0, 0.0), reached=False, revisit=True)
+    reached, _ = core.memory.add(1.175, 5.12, t, 176.0, 144.0, (0.0, 0.0))
+    core.memory.mark_visited(reached, t, (0.0, 0.0), reached=True)
+    x = 0.0
+    while core.phase not in (PHASE_LAND,):
+        t += 10
+        command = core.step(t, Pose(x, 0.0, 1.25, 0.0, 0.0, 0.0))
+        x += command.vx * 0.01
+        assert t < 200000
+    assert not core.revisiting and [e.kind for e in core.events].count("revisit") == 0
+
+
 # -- #12.7: one crown seen twice in one frame is one tree -----------------------------------------------------
 
 def test_that_two_detections_of_one_crown_in_one_frame_are_merged():

@@ -73,3 +73,31 @@ def test_that_the_visited_list_is_bounded_and_overflow_is_counted():
 def test_that_capacities_must_be_positive():
     with pytest.raises(ValueError):
         TreeMemory(capacity=0)
+
+
+DUP_RADIUS = 0.25
+
+
+def test_that_a_stored_tree_drifting_onto_a_reached_tree_is_dropped_as_that_tree():
+    # sweep flight 6: tree 7's estimate drifted to 0.11 m of reached tree 6 and was reached a second time
+    sut = TreeMemory()
+    reached = add(sut, 1.604, 0.029)
+    sut.mark_visited(reached, 1000, MAV, reached=True)
+    twin = add(sut, 1.496, 0.038)
+    neighbour = add(sut, 1.155, 0.049)  # the next tree of the column, 0.45 m on
+    assert sut.absorb_reached(DUP_RADIUS) == [(twin, reached)]
+    assert sut.get(twin) is None and sut.get(neighbour) is not None and sut.absorbed == 1
+    assert sut.absorb_reached(DUP_RADIUS) == []
+
+
+def test_that_a_tree_near_an_abandoned_one_is_not_absorbed_and_an_abandoned_twin_of_a_reached_tree_is_flagged():
+    sut = TreeMemory()
+    abandoned = add(sut, 1.265, -0.645)
+    sut.mark_visited(abandoned, 1000, MAV, reached=False, revisit=True)
+    near_abandoned = add(sut, 1.30, -0.60)
+    assert sut.absorb_reached(DUP_RADIUS) == []  # only reached trees absorb
+    entry = sut.visited[0]
+    assert not sut.near_reached(entry, DUP_RADIUS)
+    sut.mark_visited(near_abandoned, 2000, MAV, reached=True)  # flight m7: the same crown, reached later
+    assert sut.near_reached(entry, DUP_RADIUS)
+    assert not sut.near_reached(sut.visited[1], 0.01)

@@ -163,3 +163,30 @@ def test_that_a_window_centred_inside_an_accepted_crown_is_the_same_tree_but_a_n
     assert detector_core._iou(side_window, (1.2, 150.0, 100.0, 168.0)) < detector_core.DEFAULT_NMS_OVERLAP
     assert detector_core._inside_a_crown(side_window, accepted, 1.3)
     assert not detector_core._inside_a_crown(neighbour, accepted, 1.3)
+
+
+def test_that_a_large_window_straddling_an_accepted_crown_and_the_gap_beside_it_is_that_crown():
+    # sweep flight 468 at 1.46 m: tree 2 found by a 120 px window, a 168 px window over its lower half and
+    # the gap towards tree 1 (IoU 0.28, under the NMS overlap) reported a tree between the two trees
+    accepted = [detector_core.Detection(180.0, 87.0, 92.3, 92.3, 0.16)]  # from a 120 px window (x 1.3)
+    straddling = (-1.42, 177.0, 153.0, 168.0)
+    assert detector_core._iou(straddling, (0.16, 180.0, 87.0, 120.0)) < detector_core.DEFAULT_NMS_OVERLAP
+    assert detector_core._inside_a_crown(straddling, accepted, 1.3)
+    # touching neighbours one size step apart (1.3 and 1.73 crowns, centres one crown apart) stay two trees
+    crown = 92.3
+    neighbour = (-1.42, 180.0, 87.0 + crown, 168.0)
+    assert not detector_core._inside_a_crown(neighbour, accepted, 1.3)
+
+
+def test_that_the_crown_sized_window_holding_an_off_centre_best_window_anchors_the_group():
+    # straight above a 0.45 m crown at 1.1 m (130 px): a 96 px window on its fronds 30 px off centre scored
+    # best; the 168 px window holding it, within SCALE_TIE, is centred on the crown
+    off_centre = (-0.70, 197.0, 121.0, 96.0)
+    crown_sized = (-0.72, 170.0, 151.0, 168.0)
+    elsewhere = (-0.71, 120.0, 200.0, 168.0)  # scores as well but does not hold the best window
+    group = [off_centre, elsewhere, crown_sized]
+    assert detector_core._anchored(group)[0] is crown_sized
+    assert sorted(map(id, detector_core._anchored(group))) == sorted(map(id, group))
+    # a larger window scoring much worse does not take over
+    weak = (-0.70 - 2 * detector_core.SCALE_TIE, 170.0, 151.0, 168.0)
+    assert detector_core._anchored([off_centre, weak])[0] is off_centre
