@@ -10,7 +10,7 @@ import pytest
 
 from crazyflie_app import c_core
 
-CORE_SOURCES = ("nav_core.c", "nav_kalman.c", "nav_trees.c", "nav_serial.c")
+CORE_SOURCES = tuple(name for name in c_core.SOURCES if name != "nav_host.c")  # nav_host.c: host only
 BOLT_DEFINES = ("-DNAV_NO_PRINTF_FLOAT", "-DNAV_NO_STRTOD")
 ARM_FLAGS = ("-mcpu=cortex-m4", "-mthumb", "-mfloat-abi=hard", "-mfpu=fpv4-sp-d16", "-fno-math-errno", "-Os",
              "-std=gnu11", "-Wall", "-Wextra", "-Werror", "-ffunction-sections", "-fdata-sections")
