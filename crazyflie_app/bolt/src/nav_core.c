@@ -23,13 +23,7 @@ NavEvent* navPushEvent(NavCore* core, NavEventKind kind, int32_t t_ms, int32_t t
     return NULL;
   }
   NavEvent* e = &core->events[core->num_events++];
-  e->kind = kind;
-  e->t_ms = t_ms;
-  e->tree_id = tree_id;
-  e->x = x;
-  e->y = y;
-  e->a = e->b = 0.0;
-  e->n = e->variant = 0;
+  *e = (NavEvent){.kind = kind, .t_ms = t_ms, .tree_id = tree_id, .x = x, .y = y}; /* a, b, n, variant: 0 */
   return e;
 }
 
@@ -199,26 +193,19 @@ static NavCommand stepApproach(NavCore* core, int32_t t_ms, const NavPose* pose)
 
 /* -- target selection ----------------------------------------------------------------------------------- */
 
+/* A stored tree that may become the target: seen often enough, in the planting column (eligible_trees). */
+static bool eligibleTree(const NavCore* core, int32_t index) {
+  const NavTree* t = &core->memory.trees[index];
+  return t->hits >= core->params.min_hits && navInPlantingColumn(core, t->x, t->y);
+}
+
 static bool selectTarget(NavCore* core, int32_t t_ms, const NavPose* pose) {
   const NavParams* p = &core->params;
-  double cx, cy;
-  navCameraGroundPoint(core, pose, &cx, &cy);
-  const NavTree* best = NULL;
-  double best_d = 0.0;
-  for (int32_t i = 0; i < core->memory.num_trees; i++) {
-    const NavTree* t = &core->memory.trees[i];
-    if (t->hits < p->min_hits || !navInPlantingColumn(core, t->x, t->y)) {
-      continue;
-    }
-    const double d = hypot(t->x - cx, t->y - cy);
-    if (best == NULL || d < best_d || (d == best_d && t->id < best->id)) {
-      best = t;
-      best_d = d;
-    }
-  }
-  if (best == NULL) {
+  const int32_t nearest = navNearest(core, pose, false, eligibleTree);
+  if (nearest < 0) {
     return false;
   }
+  const NavTree* best = &core->memory.trees[nearest];
   core->target_id = best->id;
   core->target_since = t_ms;
   navPushEvent(core, NAV_EVENT_TARGET_SELECTED, t_ms, best->id, best->x, best->y);

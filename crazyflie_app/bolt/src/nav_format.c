@@ -98,6 +98,14 @@ static size_t appendFixed(char* out, size_t size, size_t n, double value, int de
   return append(out, size, n, number);
 }
 
+/* prefix, the value with decimals, suffix */
+static size_t appendQuantity(char* out, size_t size, size_t n, const char* prefix, double value, int decimals,
+                             const char* suffix) {
+  n = append(out, size, n, prefix);
+  n = appendFixed(out, size, n, value, decimals);
+  return append(out, size, n, suffix);
+}
+
 static size_t appendInt(char* out, size_t size, size_t n, long value) {
   char number[24];
   size_t k = 0;
@@ -125,17 +133,13 @@ int navFormatEventDetail(const NavEvent* e, char* out, size_t size) {
       n = append(out, size, n, "abandoned while hidden");
       break;
     case NAV_EVENT_TREE_REACHED:
-      n = append(out, size, n, "s_t ");
-      n = appendFixed(out, size, n, e->a, 3);
-      n = append(out, size, n, " ");
+      n = appendQuantity(out, size, n, "s_t ", e->a, 3, " ");
       n = appendFixed(out, size, n, e->b, 3);
       break;
     case NAV_EVENT_RECOVERY:
     case NAV_EVENT_APPROACH_BY_MEMORY:
       if (e->variant) {
-        n = append(out, size, n, "e_d ");
-        n = appendFixed(out, size, n, e->a, 2);
-        n = append(out, size, n, " m");
+        n = appendQuantity(out, size, n, "e_d ", e->a, 2, " m");
       } else {
         n = append(out, size, n, "not seen ");
         n = appendInt(out, size, n, e->n);
@@ -146,18 +150,11 @@ int navFormatEventDetail(const NavEvent* e, char* out, size_t size) {
       n = appendInt(out, size, n, e->n);
       break;
     case NAV_EVENT_LINK_LOST:
-      if (e->variant) {
-        n = append(out, size, n, "camera silent ");
-        n = appendFixed(out, size, n, e->a, 1);
-        n = append(out, size, n, " s: landing");
-      } else {
-        n = append(out, size, n, "camera silent: holding position");
-      }
+      n = e->variant ? appendQuantity(out, size, n, "camera silent ", e->a, 1, " s: landing")
+                     : append(out, size, n, "camera silent: holding position");
       break;
     case NAV_EVENT_LINK_RESTORED:
-      n = append(out, size, n, "after ");
-      n = appendFixed(out, size, n, e->a, 1);
-      n = append(out, size, n, " s");
+      n = appendQuantity(out, size, n, "after ", e->a, 1, " s");
       break;
     default:
       break;
@@ -184,11 +181,8 @@ int navFormatEvent(const NavEvent* e, char* out, size_t size) {
                           e->kind == NAV_EVENT_ABANDONED || e->kind == NAV_EVENT_APPROACH_BY_MEMORY ||
                           e->kind == NAV_EVENT_REVISIT;
   if (positioned) {
-    n = append(out, size, n, " at (");
-    n = appendFixed(out, size, n, e->x, 3);
-    n = append(out, size, n, ", ");
-    n = appendFixed(out, size, n, e->y, 3);
-    n = append(out, size, n, ")");
+    n = appendQuantity(out, size, n, " at (", e->x, 3, ", ");
+    n = appendQuantity(out, size, n, "", e->y, 3, ")");
   }
   if (detail[0] != '\0') {
     n = append(out, size, n, " ");

@@ -45,7 +45,13 @@ void navPredictFilter(NavCore* core, int32_t t_ms);
 void navSettleThresholds(const NavCore* core, int32_t t_ms, double* radius, double* speed);
 void navIntegrateServo(NavCore* core, int32_t t_ms, const double offset[2], double error_px, double speed);
 
+/* tree memory (nav_trees.c) */
+int32_t navTreesEntry(const NavTreeMemory* memory, bool visited, int32_t index, double* x, double* y);
+
 /* recovery (nav_recovery.c) */
+/* Whether entry index of T_d or of the visited list may be chosen. */
+typedef bool (*NavEligible)(const NavCore* core, int32_t index);
+int32_t navNearest(const NavCore* core, const NavPose* pose, bool visited, NavEligible eligible);
 NavCommand navAbandonTarget(NavCore* core, int32_t t_ms, const NavPose* pose, const NavTree* tree, bool unseen);
 NavCommand navStepRecovery(NavCore* core, int32_t t_ms, const NavPose* pose);
 void navBeginRecovery(NavCore* core, int32_t t_ms, const NavTree* tree, double e_d, bool counted);

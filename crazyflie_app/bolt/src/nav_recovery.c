@@ -66,28 +66,42 @@ void navBeginRecovery(NavCore* core, int32_t t_ms, const NavTree* tree, double e
   navEnterPhase(core, NAV_PHASE_RECOVERY, t_ms);
 }
 
+/* Index of the eligible entry of T_d (visited false) or of the visited list nearest to the camera's ground point,
+ * a tie to the smaller id (recovery.nearest); -1 if none is eligible. */
+int32_t navNearest(const NavCore* core, const NavPose* pose, bool visited, NavEligible eligible) {
+  double cx, cy;
+  navCameraGroundPoint(core, pose, &cx, &cy);
+  const int32_t count = visited ? core->memory.num_visited : core->memory.num_trees;
+  int32_t best = -1, best_id = 0;
+  double best_d = 0.0;
+  for (int32_t i = 0; i < count; i++) {
+    if (!eligible(core, i)) {
+      continue;
+    }
+    double x, y;
+    const int32_t id = navTreesEntry(&core->memory, visited, i, &x, &y);
+    const double d = hypot(x - cx, y - cy);
+    if (best < 0 || d < best_d || (d == best_d && id < best_id)) {
+      best = i;
+      best_id = id;
+      best_d = d;
+    }
+  }
+  return best;
+}
+
+/* A visited entry flagged for one more try (abandoned while hidden). */
+static bool flaggedForRevisit(const NavCore* core, int32_t index) { return core->memory.visited[index].revisit; }
+
 /* Go back once for the nearest tree abandoned while hidden (flagged in the visited list): restore it into
  * T_d as the target and fly to s_t by memory. False if there is none. */
 bool navStartRevisit(NavCore* core, int32_t t_ms, const NavPose* pose) {
   const NavParams* p = &core->params;
-  double cx, cy;
-  navCameraGroundPoint(core, pose, &cx, &cy);
-  const NavVisited* best = NULL;
-  double best_d = 0.0;
-  for (int32_t i = 0; i < core->memory.num_visited; i++) {
-    const NavVisited* e = &core->memory.visited[i];
-    if (!e->revisit) {
-      continue;
-    }
-    const double d = hypot(e->x - cx, e->y - cy);
-    if (best == NULL || d < best_d || (d == best_d && e->id < best->id)) {
-      best = e;
-      best_d = d;
-    }
-  }
-  if (best == NULL) {
+  const int32_t nearest = navNearest(core, pose, true, flaggedForRevisit);
+  if (nearest < 0) {
     return false;
   }
+  const NavVisited* best = &core->memory.visited[nearest];
   int32_t evicted[NAV_MAX_TREES];
   int32_t num_evicted = 0;
   const NavTree* tree = navTreesRestore(&core->memory, best->id, p->min_hits, (double)p->cam_width_px / 2.0,
