@@ -19,10 +19,9 @@ $(STAMP): pyproject.toml
 # crazyflie_app/c_core.py (foranav fly --app c); capp-asan: the same under AddressSanitizer + UBSan, with the
 # differential test and a flight run against it; bolt: the Bolt firmware with the app, from a firmware checkout.
 CAPP_DIR     := crazyflie_app/bolt
-CAPP_SOURCES := $(addprefix $(CAPP_DIR)/src/,nav_core.c nav_params.c nav_geometry.c nav_path.c nav_servo.c \
-                nav_recovery.c nav_vertical.c nav_link.c nav_frame.c nav_format.c nav_kalman.c nav_trees.c nav_serial.c \
-                nav_host.c)
-CAPP_HEADERS := $(addprefix $(CAPP_DIR)/src/,nav_core.h nav_internal.h)
+# the core's files are nav_* (with the host-only nav_host.c), as in crazyflie_app/c_core.py
+CAPP_SOURCES := $(sort $(wildcard $(CAPP_DIR)/src/nav_*.c))
+CAPP_HEADERS := $(sort $(wildcard $(CAPP_DIR)/src/nav_*.h))
 CAPP_CFLAGS  := -std=c11 -O2 -Wall -Wextra -Werror -fPIC -shared
 ASAN_FLAGS   := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
 
