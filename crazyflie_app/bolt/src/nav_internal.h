@@ -1,7 +1,9 @@
 /*
- * The core's internal functions, shared between its files (nav_core.c, the state machine, and one file per
- * job: nav_geometry.c, nav_path.c, nav_servo.c, nav_recovery.c, nav_vertical.c, nav_link.c, nav_frame.c).
- * Private: the public API, used by the ctypes binding and the firmware adapter, is nav_core.h.
+ * The core's internal functions, shared between its nav_*.c files: nav_core.c (the state machine) and one
+ * file per job, as the Python modules (nav_geometry.c: camera_geometry.py, nav_path.c: path_following.py,
+ * nav_servo.c: visual_servo.py, nav_recovery.c: recovery.py, nav_vertical.c: vertical.py, nav_link.c:
+ * link_watch.py, nav_frame.c: frame_input.py). Private: the public API, used by the ctypes binding and the
+ * firmware adapter, is nav_core.h.
  */
 #ifndef NAV_INTERNAL_H
 #define NAV_INTERNAL_H
@@ -21,8 +23,8 @@ void navStartTracking(NavCore* core, int32_t t_ms, double u, double v);
 NavCommand navAfterTree(NavCore* core, int32_t t_ms, const NavPose* pose);
 
 /* camera geometry (nav_geometry.c) */
-void navRotate(double yaw_deg, double bx, double by, double* wx, double* wy);     /* body -> world */
-void navUnrotate(double yaw_deg, double wx, double wy, double* bx, double* by);   /* world -> body */
+void navRotate(double yaw_deg, double bx, double by, double* wx, double* wy); /* body -> world */
+void navUnrotate(double yaw_deg, double wx, double wy, double* bx, double* by); /* world -> body */
 void navCameraGroundPoint(const NavCore* core, const NavPose* pose, double* x, double* y);
 void navPixelToWorld(const NavCore* core, double u, double v, const NavPose* pose, double* x, double* y);
 void navEgoCorrected(const NavCore* core, double u, double v, const NavPose* capture, const NavPose* now,
