@@ -19,17 +19,19 @@ $(STAMP): pyproject.toml
 # crazyflie_app/c_core.py (foranav fly --app c); capp-asan: the same under AddressSanitizer + UBSan, with the
 # differential test and a flight run against it; bolt: the Bolt firmware with the app, from a firmware checkout.
 CAPP_DIR     := crazyflie_app/bolt
-CAPP_SOURCES := $(addprefix $(CAPP_DIR)/src/,nav_core.c nav_kalman.c nav_trees.c nav_serial.c nav_host.c)
+# the core's files are nav_* (with the host-only nav_host.c), as in crazyflie_app/c_core.py
+CAPP_SOURCES := $(sort $(wildcard $(CAPP_DIR)/src/nav_*.c))
+CAPP_HEADERS := $(sort $(wildcard $(CAPP_DIR)/src/nav_*.h))
 CAPP_CFLAGS  := -std=c11 -O2 -Wall -Wextra -Werror -fPIC -shared
 ASAN_FLAGS   := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
 
 capp: build/libforanav_nav.so
 
-build/libforanav_nav.so: $(CAPP_SOURCES) $(CAPP_DIR)/src/nav_core.h
+build/libforanav_nav.so: $(CAPP_SOURCES) $(CAPP_HEADERS)
 	mkdir -p build
 	gcc $(CAPP_CFLAGS) -o $@ $(CAPP_SOURCES) -lm
 
-build/libforanav_nav_asan.so: $(CAPP_SOURCES) $(CAPP_DIR)/src/nav_core.h
+build/libforanav_nav_asan.so: $(CAPP_SOURCES) $(CAPP_HEADERS)
 	mkdir -p build
 	gcc $(CAPP_CFLAGS) -g $(ASAN_FLAGS) -o $@ $(CAPP_SOURCES) -lm
 

@@ -23,8 +23,9 @@ from crazyflie_app.navigation_core import Command, Counters, Event
 
 REPO = Path(__file__).resolve().parents[1]
 SOURCE_DIR = Path(__file__).resolve().parent / "bolt" / "src"
-SOURCES = ("nav_core.c", "nav_kalman.c", "nav_trees.c", "nav_serial.c", "nav_host.c")
-HEADERS = ("nav_core.h",)
+# the core's files are nav_*: all of them, with the host-only nav_host.c (the Bolt's src/Kbuild lists them too)
+SOURCES = tuple(sorted(path.name for path in SOURCE_DIR.glob("nav_*.c")))
+HEADERS = tuple(sorted(path.name for path in SOURCE_DIR.glob("nav_*.h")))
 LIBRARY = REPO / "build" / "libforanav_nav.so"
 HOST_CFLAGS = ("-std=c11", "-O2", "-Wall", "-Wextra", "-Werror", "-fPIC", "-shared")
 EVENT_KINDS = ("phase", "tree_added", "tree_evicted", "target_selected", "tree_reached", "recovery",

@@ -17,7 +17,8 @@ typedef struct {
 typedef struct {
   int32_t phase, target_id, waypoint_index, num_trees, num_visited;
   int32_t captured, link_lost, link_aborted, has_target;
-  uint32_t detections, out_of_column, on_visited, reached, recoveries, abandoned, link_losses, duplicates;
+  NavCounters counters; /* detections, out_of_column, on_visited, reached, recoveries, abandoned, link_losses,
+                         duplicates: the flat uint32 fields of c_core._Status */
   uint32_t evicted, forgotten, lines_dropped, other_labels, frames, frame_overflow, events_dropped, unstored;
   int32_t pending_detections, revisiting;
   double err_u, err_v, target_x, target_y;
@@ -128,20 +129,13 @@ void navHostStatus(const NavHostApp* app, NavHostStatus* s) {
   s->captured = c->captured;
   s->link_lost = c->link_lost;
   s->link_aborted = c->link_aborted;
-  s->detections = c->counters.detections;
-  s->out_of_column = c->counters.out_of_column;
-  s->on_visited = c->counters.on_visited;
-  s->reached = c->counters.reached;
-  s->recoveries = c->counters.recoveries;
-  s->abandoned = c->counters.abandoned;
-  s->link_losses = c->counters.link_losses;
+  s->counters = c->counters;
   s->evicted = c->memory.evicted;
   s->forgotten = c->memory.visited_forgotten;
   s->lines_dropped = app->input.assembler.dropped;
   s->other_labels = app->input.other_labels;
   s->frames = app->input.frames;
   s->frame_overflow = app->input.frame_overflow;
-  s->duplicates = c->counters.duplicates;
   s->unstored = c->memory.unstored;
   s->pending_detections = app->input.frame_length;
   s->revisiting = c->revisiting;
@@ -154,33 +148,31 @@ void navHostStatus(const NavHostApp* app, NavHostStatus* s) {
   s->target_y = target != NULL ? target->y : 0.0;
 }
 
-/* Stored trees: (id, x, y, hits, last_ms) rows into out (5 doubles each); returns their number. */
-int32_t navHostTrees(const NavHostApp* app, double* out, int32_t max_rows) {
-  const NavTreeMemory* m = &app->core.memory;
-  const int32_t n = m->num_trees < max_rows ? m->num_trees : max_rows;
+/* Rows of T_d (visited false: id, x, y, hits, last_ms; 5 doubles each) or of the visited list (id, x, y, t_ms,
+ * reached, revisit; 6 doubles each) into out; returns their number. */
+static int32_t memoryRows(const NavTreeMemory* m, bool visited, double* out, int32_t max_rows) {
+  const int32_t count = visited ? m->num_visited : m->num_trees;
+  const int32_t n = count < max_rows ? count : max_rows;
   for (int32_t i = 0; i < n; i++) {
-    out[5 * i] = m->trees[i].id;
-    out[5 * i + 1] = m->trees[i].x;
-    out[5 * i + 2] = m->trees[i].y;
-    out[5 * i + 3] = m->trees[i].hits;
-    out[5 * i + 4] = m->trees[i].last_ms;
+    if (visited) {
+      const NavVisited* e = &m->visited[i];
+      const double row[6] = {e->id, e->x, e->y, e->t_ms, e->reached, e->revisit};
+      memcpy(out + 6 * i, row, sizeof(row));
+    } else {
+      const NavTree* t = &m->trees[i];
+      const double row[5] = {t->id, t->x, t->y, t->hits, t->last_ms};
+      memcpy(out + 5 * i, row, sizeof(row));
+    }
   }
   return n;
 }
 
-/* Visited list: (id, x, y, t_ms, reached, revisit) rows (5 + 1 doubles each); returns their number. */
+int32_t navHostTrees(const NavHostApp* app, double* out, int32_t max_rows) {
+  return memoryRows(&app->core.memory, false, out, max_rows);
+}
+
 int32_t navHostVisited(const NavHostApp* app, double* out, int32_t max_rows) {
-  const NavTreeMemory* m = &app->core.memory;
-  const int32_t n = m->num_visited < max_rows ? m->num_visited : max_rows;
-  for (int32_t i = 0; i < n; i++) {
-    out[6 * i] = m->visited[i].id;
-    out[6 * i + 1] = m->visited[i].x;
-    out[6 * i + 2] = m->visited[i].y;
-    out[6 * i + 3] = m->visited[i].t_ms;
-    out[6 * i + 4] = m->visited[i].reached;
-    out[6 * i + 5] = m->visited[i].revisit;
-  }
-  return n;
+  return memoryRows(&app->core.memory, true, out, max_rows);
 }
 
 /* Pops the oldest event: its console line into text, kind / tree id / x / y / t out. 0: none left. */

@@ -14,30 +14,23 @@
 
 #include "nav_core.h"
 
-/* 4x4 products on row-major arrays (flat pointers: gcc's -fsanitize builds misjudge 2-D array parameters) */
-static void matMul4(const double* a, const double* b, double* out) {
+/* 4x4 products on row-major arrays (flat pointers: gcc's -fsanitize builds misjudge 2-D array parameters).
+ * b[k][j] is b[row * k + column * j]: (4, 1) is b itself, (1, 4) its transpose. */
+static void matMul4Strided(const double* a, const double* b, int row, int column, double* out) {
   for (int i = 0; i < 4; i++) {
     for (int j = 0; j < 4; j++) {
       double sum = 0.0;
       for (int k = 0; k < 4; k++) {
-        sum += a[4 * i + k] * b[4 * k + j];
+        sum += a[4 * i + k] * b[row * k + column * j];
       }
       out[4 * i + j] = sum;
     }
   }
 }
 
-static void matMul4T(const double* a, const double* b, double* out) { /* a b' */
-  for (int i = 0; i < 4; i++) {
-    for (int j = 0; j < 4; j++) {
-      double sum = 0.0;
-      for (int k = 0; k < 4; k++) {
-        sum += a[4 * i + k] * b[4 * j + k];
-      }
-      out[4 * i + j] = sum;
-    }
-  }
-}
+static void matMul4(const double* a, const double* b, double* out) { matMul4Strided(a, b, 4, 1, out); }
+
+static void matMul4T(const double* a, const double* b, double* out) { matMul4Strided(a, b, 1, 4, out); } /* a b' */
 
 void navKalmanInit(NavKalman* kf, double u, double v, double measurement_std_px, double accel_psd,
                    double initial_velocity_std) {

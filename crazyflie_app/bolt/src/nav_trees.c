@@ -14,7 +14,7 @@
 #include <math.h>
 #include <string.h>
 
-#include "nav_core.h"
+#include "nav_internal.h"
 
 void navTreesInit(NavTreeMemory* memory, int32_t capacity, int32_t visited_capacity) {
   memset(memory, 0, sizeof(*memory));
@@ -36,15 +36,22 @@ NavTree* navTreesGet(NavTreeMemory* memory, int32_t id) {
   return NULL;
 }
 
+/* The entry at index of T_d (visited false) or of the visited list: returns its id, its position in x, y. */
+int32_t navTreesEntry(const NavTreeMemory* memory, bool visited, int32_t index, double* x, double* y) {
+  if (visited) {
+    *x = memory->visited[index].x;
+    *y = memory->visited[index].y;
+    return memory->visited[index].id;
+  }
+  *x = memory->trees[index].x;
+  *y = memory->trees[index].y;
+  return memory->trees[index].id;
+}
+
 /* Candidate order k: stored trees first (insertion order), then the visited list (oldest first). */
 static void candidatePosition(const NavTreeMemory* memory, int32_t k, double* x, double* y) {
-  if (k < memory->num_trees) {
-    *x = memory->trees[k].x;
-    *y = memory->trees[k].y;
-  } else {
-    *x = memory->visited[k - memory->num_trees].x;
-    *y = memory->visited[k - memory->num_trees].y;
-  }
+  const bool visited = k >= memory->num_trees;
+  navTreesEntry(memory, visited, visited ? k - memory->num_trees : k, x, y);
 }
 
 void navTreesAssociate(const NavTreeMemory* memory, const double (*points)[2], int32_t count,
@@ -92,37 +99,16 @@ void navTreesAssociate(const NavTreeMemory* memory, const double (*points)[2], i
   }
 }
 
-/* Index of the entry farthest from the MAV; ties go to the smaller id (tree_memory._farthest). */
-static int32_t farthestTree(const NavTreeMemory* memory, double mx, double my) {
-  int32_t best = 0;
-  double best_d = hypot(memory->trees[0].x - mx, memory->trees[0].y - my);
-  for (int32_t i = 1; i < memory->num_trees; i++) {
-    const double d = hypot(memory->trees[i].x - mx, memory->trees[i].y - my);
-    if (d > best_d || (d == best_d && memory->trees[i].id < memory->trees[best].id)) {
-      best = i;
-      best_d = d;
-    }
-  }
-  return best;
-}
-
-static int32_t farthestVisited(const NavTreeMemory* memory, double mx, double my) {
-  int32_t best = 0;
-  double best_d = hypot(memory->visited[0].x - mx, memory->visited[0].y - my);
-  for (int32_t i = 1; i < memory->num_visited; i++) {
-    const double d = hypot(memory->visited[i].x - mx, memory->visited[i].y - my);
-    if (d > best_d || (d == best_d && memory->visited[i].id < memory->visited[best].id)) {
-      best = i;
-      best_d = d;
-    }
-  }
-  return best;
-}
-
 static void removeTreeAt(NavTreeMemory* memory, int32_t index) {
   memmove(&memory->trees[index], &memory->trees[index + 1],
           (size_t)(memory->num_trees - index - 1) * sizeof(NavTree));
   memory->num_trees--;
+}
+
+static void removeVisitedAt(NavTreeMemory* memory, int32_t index) {
+  memmove(&memory->visited[index], &memory->visited[index + 1],
+          (size_t)(memory->num_visited - index - 1) * sizeof(NavVisited));
+  memory->num_visited--;
 }
 
 static bool isProtected(int32_t id, const int32_t* protected_ids, int32_t num_protected) {
@@ -134,22 +120,43 @@ static bool isProtected(int32_t id, const int32_t* protected_ids, int32_t num_pr
   return false;
 }
 
-/* Index of the unprotected tree farthest from the MAV (ties: smaller id), -1 if every tree is protected. */
-static int32_t farthestUnprotected(const NavTreeMemory* memory, double mx, double my, const int32_t* protected_ids,
-                                   int32_t num_protected) {
-  int32_t best = -1;
+/* Index of the entry of T_d (visited false) or of the visited list farthest from the MAV, but for the protected
+ * ids; ties go to the smaller id (tree_memory._farthest). -1 if every entry is protected. */
+static int32_t farthestEntry(const NavTreeMemory* memory, bool visited, double mx, double my,
+                             const int32_t* protected_ids, int32_t num_protected) {
+  const int32_t count = visited ? memory->num_visited : memory->num_trees;
+  int32_t best = -1, best_id = 0;
   double best_d = 0.0;
-  for (int32_t i = 0; i < memory->num_trees; i++) {
-    if (isProtected(memory->trees[i].id, protected_ids, num_protected)) {
+  for (int32_t i = 0; i < count; i++) {
+    double x, y;
+    const int32_t id = navTreesEntry(memory, visited, i, &x, &y);
+    if (isProtected(id, protected_ids, num_protected)) {
       continue;
     }
-    const double d = hypot(memory->trees[i].x - mx, memory->trees[i].y - my);
-    if (best < 0 || d > best_d || (d == best_d && memory->trees[i].id < memory->trees[best].id)) {
+    const double d = hypot(x - mx, y - my);
+    if (best < 0 || d > best_d || (d == best_d && id < best_id)) {
       best = i;
+      best_id = id;
       best_d = d;
     }
   }
   return best;
+}
+
+/* Removes the stored tree at index, counted in evicted; returns its id. */
+static int32_t evictAt(NavTreeMemory* memory, int32_t index) {
+  const int32_t id = memory->trees[index].id;
+  removeTreeAt(memory, index);
+  memory->evicted++;
+  return id;
+}
+
+/* Appends a tree to T_d (room made by the caller). */
+static NavTree* storeTree(NavTreeMemory* memory, int32_t id, double x, double y, int32_t hits, int32_t t_ms, double u,
+                          double v) {
+  NavTree* tree = &memory->trees[memory->num_trees++];
+  *tree = (NavTree){.id = id, .x = x, .y = y, .hits = hits, .first_ms = t_ms, .last_ms = t_ms, .u = u, .v = v};
+  return tree;
 }
 
 int32_t navTreesAdd(NavTreeMemory* memory, double x, double y, int32_t t_ms, double u, double v,
@@ -158,35 +165,21 @@ int32_t navTreesAdd(NavTreeMemory* memory, double x, double y, int32_t t_ms, dou
   const int32_t capacity = clampCapacity(memory->capacity, NAV_MAX_TREES);
   *num_evicted = 0;
   while (memory->num_trees >= capacity) {
-    const int32_t index = farthestUnprotected(memory, mav_x, mav_y, protected_ids, num_protected);
+    const int32_t index = farthestEntry(memory, false, mav_x, mav_y, protected_ids, num_protected);
     if (index < 0) {
       memory->unstored++;
       return 0;
     }
-    evicted[(*num_evicted)++] = memory->trees[index].id;
-    removeTreeAt(memory, index);
-    memory->evicted++;
+    evicted[(*num_evicted)++] = evictAt(memory, index);
   }
-  NavTree* tree = &memory->trees[memory->num_trees++];
-  tree->id = memory->next_id++;
-  tree->x = x;
-  tree->y = y;
-  tree->hits = 1;
-  tree->first_ms = t_ms;
-  tree->last_ms = t_ms;
-  tree->u = u;
-  tree->v = v;
-  return tree->id;
+  return storeTree(memory, memory->next_id++, x, y, 1, t_ms, u, v)->id;
 }
 
 int32_t navTreesEvictToCapacity(NavTreeMemory* memory, double mav_x, double mav_y, int32_t* evicted) {
   const int32_t capacity = clampCapacity(memory->capacity, NAV_MAX_TREES);
   int32_t n = 0;
   while (memory->num_trees > capacity) {
-    const int32_t index = farthestTree(memory, mav_x, mav_y);
-    evicted[n++] = memory->trees[index].id;
-    removeTreeAt(memory, index);
-    memory->evicted++;
+    evicted[n++] = evictAt(memory, farthestEntry(memory, false, mav_x, mav_y, NULL, 0));
   }
   return n;
 }
@@ -202,25 +195,12 @@ NavTree* navTreesRestore(NavTreeMemory* memory, int32_t id, int32_t hits, double
     return NULL;
   }
   const NavVisited entry = memory->visited[k];
-  memmove(&memory->visited[k], &memory->visited[k + 1], (size_t)(memory->num_visited - k - 1) * sizeof(NavVisited));
-  memory->num_visited--;
+  removeVisitedAt(memory, k);
   const int32_t capacity = clampCapacity(memory->capacity, NAV_MAX_TREES);
   while (memory->num_trees >= capacity) {
-    const int32_t index = farthestTree(memory, mav_x, mav_y);
-    evicted[(*num_evicted)++] = memory->trees[index].id;
-    removeTreeAt(memory, index);
-    memory->evicted++;
+    evicted[(*num_evicted)++] = evictAt(memory, farthestEntry(memory, false, mav_x, mav_y, NULL, 0));
   }
-  NavTree* tree = &memory->trees[memory->num_trees++];
-  tree->id = entry.id;
-  tree->x = entry.x;
-  tree->y = entry.y;
-  tree->hits = hits;
-  tree->first_ms = entry.t_ms;
-  tree->last_ms = entry.t_ms;
-  tree->u = u;
-  tree->v = v;
-  return tree;
+  return storeTree(memory, entry.id, entry.x, entry.y, hits, entry.t_ms, u, v);
 }
 
 void navTreesUpdate(NavTreeMemory* memory, int32_t id, double x, double y, int32_t t_ms, double u, double v) {
@@ -248,10 +228,7 @@ bool navTreesMarkVisited(NavTreeMemory* memory, int32_t id, int32_t t_ms, double
   removeTreeAt(memory, (int32_t)(t - memory->trees));
   const int32_t capacity = clampCapacity(memory->visited_capacity, NAV_MAX_VISITED);
   while (memory->num_visited >= capacity) {
-    const int32_t index = farthestVisited(memory, mav_x, mav_y);
-    memmove(&memory->visited[index], &memory->visited[index + 1],
-            (size_t)(memory->num_visited - index - 1) * sizeof(NavVisited));
-    memory->num_visited--;
+    removeVisitedAt(memory, farthestEntry(memory, true, mav_x, mav_y, NULL, 0));
     memory->visited_forgotten++;
   }
   NavVisited* entry = &memory->visited[memory->num_visited++];

@@ -3,6 +3,7 @@ strtod: newlib-nano without syscalls) agreeing with it, and the ARM objects warn
 calls that the firmware cannot link. The full firmware build is `make bolt` (docs/bolt.md, .ci/run)."""
 import ctypes
 import random
+import re
 import shutil
 import subprocess
 
@@ -10,7 +11,7 @@ import pytest
 
 from crazyflie_app import c_core
 
-CORE_SOURCES = ("nav_core.c", "nav_kalman.c", "nav_trees.c", "nav_serial.c")
+CORE_SOURCES = tuple(name for name in c_core.SOURCES if name != "nav_host.c")  # nav_host.c: host only
 BOLT_DEFINES = ("-DNAV_NO_PRINTF_FLOAT", "-DNAV_NO_STRTOD")
 ARM_FLAGS = ("-mcpu=cortex-m4", "-mthumb", "-mfloat-abi=hard", "-mfpu=fpv4-sp-d16", "-fno-math-errno", "-Os",
              "-std=gnu11", "-Wall", "-Wextra", "-Werror", "-ffunction-sections", "-fdata-sections")
@@ -75,6 +76,13 @@ def test_that_the_core_compiles_for_the_bolt_under_werror_and_imports_nothing_un
     libgcc = {name for name in imports if name.startswith("__aeabi_")}  # soft double, division: libgcc
     assert imports - internal - libgcc <= ARM_ALLOWED_IMPORTS, sorted(imports - internal - libgcc - ARM_ALLOWED_IMPORTS)
     assert not imports & {"malloc", "free", "snprintf", "printf", "strtod", "sprintf"}
+
+
+def test_that_the_bolt_kbuild_builds_every_core_source_and_the_adapter():
+    objects = re.findall(r"^obj-y \+= (\w+)\.o$", (c_core.SOURCE_DIR / "Kbuild").read_text(), re.M)
+    adapter = {path.stem for path in c_core.SOURCE_DIR.glob("foranav_*.c")}
+    assert sorted(objects) == sorted({name[:-2] for name in CORE_SOURCES} | adapter)
+    assert "nav_core.c" in CORE_SOURCES and "foranav_app" in adapter
 
 
 def test_that_the_committed_bolt_path_is_map1s_and_a_bad_map_is_refused(tmp_path, capsys):

@@ -26,6 +26,7 @@ from ..conftest import console_text as console
 
 REPO = REPO_ROOT
 APP_SOURCE = REPO / "crazyflie_app" / "bolt" / "src" / "foranav_app.c"
+TABLE_SOURCES = {"PARAM": APP_SOURCE.with_name("foranav_params.c"), "LOG": APP_SOURCE.with_name("foranav_log.c")}
 PATH = ((0.0, 0.0), (3.0, 0.0))
 MAX_MEAN_DEVIATION_M = 0.05
 
@@ -104,8 +105,8 @@ def test_that_the_c_params_mirror_the_python_params_field_by_field():
 
 
 def _c_table(kind):
-    """(type, name) of every PARAM_ADD / LOG_ADD of the app group in foranav_app.c."""
-    text = APP_SOURCE.read_text()
+    """(type, name) of every PARAM_ADD / LOG_ADD of the app group (foranav_params.c, foranav_log.c)."""
+    text = TABLE_SOURCES[kind].read_text()
     block = re.search(r"%s_GROUP_START\(app\)(.*?)%s_GROUP_STOP\(app\)" % (kind, kind), text, re.S).group(1)
     return re.findall(r"%s_ADD\((\w+), (\w+), &" % kind, block)
 
