@@ -29,7 +29,8 @@ HEADERS = tuple(sorted(path.name for path in SOURCE_DIR.glob("nav_*.h")))
 LIBRARY = REPO / "build" / "libforanav_nav.so"
 HOST_CFLAGS = ("-std=c11", "-O2", "-Wall", "-Wextra", "-Werror", "-fPIC", "-shared")
 EVENT_KINDS = ("phase", "tree_added", "tree_evicted", "target_selected", "tree_reached", "recovery",
-               "approach_by_memory", "reacquired", "abandoned", "waypoint", "link_lost", "link_restored", "revisit")
+               "approach_by_memory", "reacquired", "abandoned", "waypoint", "link_lost", "link_restored", "revisit",
+               "tree_absorbed")
 LINE_KINDS = (None, "T2", "N2", "MARK START", "MARK STOP")
 TEXT_SIZE = 160
 MAX_ROWS = 256

@@ -4,8 +4,8 @@ are merged when they are one crown seen twice, associated with T_d or the visite
 
 * A tree enters T_d when seen inside the planting column of the *current* segment (orthogonal distance
   <= ``columnFactor`` x ``crownSize``); after ``minHits`` detections the nearest such tree becomes the target t*.
-* After each frame a stored tree within ``dupRadius`` of a reached tree is dropped as that tree seen again
-  (event ``tree_absorbed``; tree_memory).
+* After each frame the core drops a stored tree within ``dupRadius`` of a reached tree as that tree seen
+  again (event ``tree_absorbed``; tree_memory).
 """
 from crazyflie_app.camera_geometry import merge_duplicates
 from crazyflie_app.nav_types import Event
@@ -38,8 +38,6 @@ class FrameInput:
                 measure(t_ms, det)
             merged_ids.append(tree_id)
         self.counters.detections += len(detections)
-        for gone, twin in self.memory.absorb_reached(p.duplicate_radius_m):
-            events.append(Event("tree_absorbed", t_ms, gone, detail="reached tree %d" % twin))
         return [merged_ids[k] for k in owner]
 
     def _take_detection(self, t_ms, det, wx, wy, kind, tree_id, protected, mav_xy, events, evicted):

@@ -95,9 +95,14 @@ class NavigationCore:
         pose_capture = self._poses.at(t_ms - self.params.cam_latency_ms) or pose_now
         points = [self.camera.pixel_to_world(d.u, d.v, pose_capture) for d in detections]
         self.last_frame_points = points
-        return self.frames.take(t_ms, detections, points, (pose_now.x, pose_now.y), self.events,
-                                lambda: self.target_id, self._evicted,
-                                lambda t, det: self._measure_target(t, det, pose_capture, pose_now))
+        ids = self.frames.take(t_ms, detections, points, (pose_now.x, pose_now.y), self.events,
+                               lambda: self.target_id, self._evicted,
+                               lambda t, det: self._measure_target(t, det, pose_capture, pose_now))
+        for gone, twin in self.memory.absorb_reached(self.params.duplicate_radius_m):
+            self.events.append(Event("tree_absorbed", t_ms, gone, detail="reached tree %d" % twin))
+            if gone == self.target_id:
+                self._drop_target()
+        return ids
 
     def _evicted(self, t_ms, evicted, why):
         for gone in evicted:

@@ -25,10 +25,11 @@
 #define NAV_MAX_VISITED 128
 #define NAV_MAX_FRAME_DETECTIONS 64 /* app.frameCap (default 64) is clamped to it */
 #define NAV_MAX_EVENTS 64 /* drained every tick; a frame of 64 new trees would overflow it (counted) */
-/* Ticks of pose history for latency compensation: 470 ms at 100 Hz. The Python core keeps 128 (1.3 s); the
- * lookup (newest pose not later than t - camLatency) gives the same pose whenever camLatency < 470 ms, and
- * the Bolt's RAM is short (98 % used with 128). */
-#define NAV_POSE_HISTORY 48
+/* Ticks of pose history for latency compensation: 1.28 s at 100 Hz, as the Python core
+ * (nav_types.POSE_HISTORY_LENGTH; tests/crazyflie_app/bolt/test_build.py checks it). Not only the camera latency
+ * looks back: a target selected from T_d is ego-corrected from the pose of its last detection, up to
+ * app.lostTimeout (1.5 s) old; with 48 ticks the two cores chose different setpoints there. */
+#define NAV_POSE_HISTORY 128
 #define NAV_POSITION_AVERAGE_WINDOW 20
 #define NAV_MAX_LINE_LENGTH 64 /* longest valid serial message (foranav_serial.MAX_LINE_LENGTH) */
 #define NAV_LABEL_LENGTH (NAV_MAX_LINE_LENGTH + 1)
@@ -60,6 +61,7 @@ typedef enum {
   NAV_EVENT_LINK_LOST,
   NAV_EVENT_LINK_RESTORED,
   NAV_EVENT_REVISIT,
+  NAV_EVENT_TREE_ABSORBED,
   NAV_EVENT_KIND_COUNT,
 } NavEventKind;
 
@@ -128,6 +130,7 @@ typedef struct {
   double a, b;     /* s_t (reached), e_d (recovery), silence in s (link events) */
   int32_t n;       /* phase entered, waypoint index, ms not seen */
   int32_t variant; /* recovery: 1 e_d, 0 not seen; link_lost: 1 landing, 0 holding; abandoned: 1 revisit */
+                   /* (n is also the reached twin's id of tree_absorbed) */
 } NavEvent;
 
 typedef struct {
@@ -156,6 +159,7 @@ typedef struct {
   int32_t num_visited;
   uint32_t evicted, visited_forgotten;
   uint32_t unstored; /* new trees not stored: T_d full of trees seen in the same frame */
+  uint32_t absorbed; /* stored trees dropped as a reached tree seen again */
   int32_t next_id;
 } NavTreeMemory;
 
@@ -295,6 +299,11 @@ int32_t navTreesAdd(NavTreeMemory* memory, double x, double y, int32_t t_ms, dou
                     int32_t* evicted, int32_t* num_evicted);
 /* After capacity was lowered: evict the farthest trees until T_d fits. Returns how many (ids in evicted). */
 int32_t navTreesEvictToCapacity(NavTreeMemory* memory, double mav_x, double mav_y, int32_t* evicted);
+/* Drop every stored tree within radius of a reached visited entry (that tree seen again). Returns how many;
+ * their ids go to dropped[], the reached entries' ids to twins[] (at most NAV_MAX_TREES each). */
+int32_t navTreesAbsorbReached(NavTreeMemory* memory, double radius, int32_t* dropped, int32_t* twins);
+/* True when a reached visited entry other than the one at index lies within radius of it. */
+bool navTreesNearReached(const NavTreeMemory* memory, int32_t index, double radius);
 /* Move a visited entry back into T_d (same id and position, hits, last seen when visited, image (u, v));
  * a full T_d evicts its farthest tree first. NULL if id is not visited. */
 NavTree* navTreesRestore(NavTreeMemory* memory, int32_t id, int32_t hits, double u, double v, double mav_x,

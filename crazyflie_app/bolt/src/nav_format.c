@@ -14,7 +14,8 @@ static const char* const PHASE_NAMES[] = {"BOOT", "TAKEOFF", "FOLLOW_PATH", "APP
                                           "RETURN_TO_PATH", "LAND", "DONE", "NO_DECK", "NO_CAMERA"};
 static const char* const EVENT_NAMES[] = {"phase", "tree_added", "tree_evicted", "target_selected",
                                           "tree_reached", "recovery", "approach_by_memory", "reacquired",
-                                          "abandoned", "waypoint", "link_lost", "link_restored", "revisit"};
+                                          "abandoned", "waypoint", "link_lost", "link_restored", "revisit",
+                                          "tree_absorbed"};
 
 const char* navPhaseName(int32_t phase) {
   return (phase >= 0 && phase <= NAV_PHASE_NO_CAMERA) ? PHASE_NAMES[phase] : "?";
@@ -131,6 +132,10 @@ int navFormatEventDetail(const NavEvent* e, char* out, size_t size) {
       break;
     case NAV_EVENT_REVISIT:
       n = append(out, size, n, "abandoned while hidden");
+      break;
+    case NAV_EVENT_TREE_ABSORBED:
+      n = append(out, size, n, "reached tree ");
+      n = appendInt(out, size, n, e->n);
       break;
     case NAV_EVENT_TREE_REACHED:
       n = appendQuantity(out, size, n, "s_t ", e->a, 3, " ");

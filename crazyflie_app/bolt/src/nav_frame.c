@@ -59,6 +59,21 @@ static int32_t takeDetection(NavCore* core, int32_t t_ms, int32_t k, int32_t* nu
   return tree_id;
 }
 
+/* Stored trees that are a reached tree seen again are dropped (the target too). */
+static void absorbReached(NavCore* core, int32_t t_ms) {
+  int32_t dropped[NAV_MAX_TREES], twins[NAV_MAX_TREES];
+  const int32_t count = navTreesAbsorbReached(&core->memory, core->params.duplicate_radius_m, dropped, twins);
+  for (int32_t k = 0; k < count; k++) {
+    NavEvent* e = navPushEvent(core, NAV_EVENT_TREE_ABSORBED, t_ms, dropped[k], 0.0, 0.0);
+    if (e != NULL) {
+      e->n = twins[k];
+    }
+    if (dropped[k] == core->target_id) {
+      navDropTarget(core);
+    }
+  }
+}
+
 int32_t navCoreOnFrame(NavCore* core, int32_t t_ms, const NavDetection* detections, int32_t count,
                        const NavPose* pose_now) {
   const NavParams* p = &core->params;
@@ -89,5 +104,6 @@ int32_t navCoreOnFrame(NavCore* core, int32_t t_ms, const NavDetection* detectio
   for (int32_t i = 0; i < count; i++) {
     core->last_frame_ids[i] = core->merged_ids[core->owner[i]];
   }
+  absorbReached(core, t_ms);
   return count;
 }

@@ -90,8 +90,12 @@ int32_t navNearest(const NavCore* core, const NavPose* pose, bool visited, NavEl
   return best;
 }
 
-/* A visited entry flagged for one more try (abandoned while hidden). */
-static bool flaggedForRevisit(const NavCore* core, int32_t index) { return core->memory.visited[index].revisit; }
+/* A visited entry flagged for one more try (abandoned while hidden), unless a reached tree lies within
+ * app.dupRadius of it (it was that tree). */
+static bool flaggedForRevisit(const NavCore* core, int32_t index) {
+  return core->memory.visited[index].revisit &&
+         !navTreesNearReached(&core->memory, index, core->params.duplicate_radius_m);
+}
 
 /* Go back once for the nearest tree abandoned while hidden (flagged in the visited list): restore it into
  * T_d as the target and fly to s_t by memory. False if there is none. */

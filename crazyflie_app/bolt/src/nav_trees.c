@@ -9,7 +9,8 @@
  * nearest-neighbour with exclusivity per frame: each detection goes to the nearest stored or visited tree
  * within the merge radius, no two detections of one frame to the same tree. It is done greedily on the
  * smallest (distance, detection, candidate order) pair left, which picks the same pairs as sorting all
- * of them (tree_memory.py) without a pair array (no RAM to spare on the Bolt).
+ * of them (tree_memory.py) without a pair array (no RAM to spare on the Bolt). A stored tree within
+ * app.dupRadius of a reached tree is that tree seen again: dropped (counted in absorbed).
  */
 #include <math.h>
 #include <string.h>
@@ -239,4 +240,37 @@ bool navTreesMarkVisited(NavTreeMemory* memory, int32_t id, int32_t t_ms, double
   entry->reached = reached;
   entry->revisit = revisit;
   return true;
+}
+
+/* Id of the first reached visited entry (oldest first), but for the one at skip, within radius of (x, y);
+ * 0 if none. */
+static int32_t reachedWithin(const NavTreeMemory* memory, double x, double y, double radius, int32_t skip) {
+  for (int32_t k = 0; k < memory->num_visited; k++) {
+    const NavVisited* e = &memory->visited[k];
+    if (k != skip && e->reached && hypot(x - e->x, y - e->y) <= radius) {
+      return e->id;
+    }
+  }
+  return 0;
+}
+
+int32_t navTreesAbsorbReached(NavTreeMemory* memory, double radius, int32_t* dropped, int32_t* twins) {
+  int32_t count = 0;
+  int32_t i = 0;
+  while (i < memory->num_trees) {
+    const int32_t twin = reachedWithin(memory, memory->trees[i].x, memory->trees[i].y, radius, -1);
+    if (twin == 0) {
+      i++;
+      continue;
+    }
+    dropped[count] = memory->trees[i].id;
+    twins[count++] = twin;
+    removeTreeAt(memory, i);
+    memory->absorbed++;
+  }
+  return count;
+}
+
+bool navTreesNearReached(const NavTreeMemory* memory, int32_t index, double radius) {
+  return reachedWithin(memory, memory->visited[index].x, memory->visited[index].y, radius, index) != 0;
 }
