@@ -17,6 +17,7 @@ SHIFTED_PER_TREE = 3
 LOOKALIKE_COPIES = 4  # windows per look-alike object (other species, roofs, road crossings)
 BACKGROUND_PER_FRAME = 6
 HARD_NEGATIVES_PER_FRAME = 10
+SURVEY_HARD_NEGATIVES_PER_CROWN = 1.0  # survey frames hold tens to hundreds of crowns: mine in proportion
 HARD_NEGATIVE_SCORE = -0.5  # windows scoring above this (and not a tree) are mined
 COLOUR_SVM_C = 0.1
 SURVEY_BACKGROUND_SCALE = (0.8, 1.25)  # survey background windows: the imagery's window size x this
@@ -168,7 +169,8 @@ def survey_windows(frame, margin):
 def hard_negatives(frames, species, model, rng, survey=False):
     """Windows the current model scores above HARD_NEGATIVE_SCORE that are not trees of the species (survey
     imagery: at the frame's crown scale, inside its annotated area). Vectorised over each score map: a
-    survey image holds hundreds of thousands of windows."""
+    survey image holds hundreds of thousands of windows. Per frame and round: the best half of the quota and a
+    random half of the rest (camera frames: HARD_NEGATIVES_PER_FRAME; survey frames: hard_negative_quota)."""
     out = []
     for frame in frames:
         windows = survey_windows(frame, model.window_margin) if survey else None
@@ -188,15 +190,23 @@ def hard_negatives(frames, species, model, rng, survey=False):
             values = scores[rows, cols].astype(np.float64)
             found.extend(zip(values[keep].tolist(), cx[keep].tolist(), cy[keep].tolist(),
                              [plan.window] * int(keep.sum())))
-        if len(found) > HARD_NEGATIVES_PER_FRAME:
+        quota = hard_negative_quota(frame, species) if survey else HARD_NEGATIVES_PER_FRAME
+        if len(found) > quota:
             found.sort(key=lambda f: -f[0])
-            keep = found[:HARD_NEGATIVES_PER_FRAME // 2]
-            rest = found[HARD_NEGATIVES_PER_FRAME // 2:]
-            picks = rng.choice(len(rest), HARD_NEGATIVES_PER_FRAME - len(keep), replace=False)
+            keep = found[:quota // 2]
+            rest = found[quota // 2:]
+            picks = rng.choice(len(rest), quota - len(keep), replace=False)
             found = keep + [rest[i] for i in sorted(picks)]
         for _score, cx, cy, side in found:
             out.append(dataset.top_descriptor(frame, cx, cy, side))
     return np.array(out, np.float32).reshape(-1, features.hog_descriptor_length())
+
+
+def hard_negative_quota(frame, species):
+    """Hard negatives mined per round from one survey frame: one per complete crown of the species, at least
+    HARD_NEGATIVES_PER_FRAME. A survey image of 60 crowns has the false alarms of many camera frames; ten per
+    image (the camera frames' quota) left most of them unseen by the SVM."""
+    return max(HARD_NEGATIVES_PER_FRAME, int(round(SURVEY_HARD_NEGATIVES_PER_CROWN * len(frame.trees(species)))))
 
 
 def _area_mask(frame):
