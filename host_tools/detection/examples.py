@@ -216,3 +216,66 @@ def _area_mask(frame):
     if area is not None:
         cv2.fillConvexPoly(mask, np.round(area.reshape(-1, 2)).astype(np.int32), 1)
     return mask.astype(bool)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# The second stage (survey imagery): a finer HOG of the windows the first stage lets through
+
+
+SECOND_STAGE_SCORE = -1.0  # first-stage group bests above this are the second stage's false alarms to learn
+SECOND_STAGE_SPREAD = (0.85, 1.0, 1.18)  # false alarms at typical crown x margin x these (detection's sizes)
+
+
+def second_descriptor(frame, cx, cy, side, window, transform=0):
+    """foranav_features.second_stage_hog of a frame window; transform 0..7 as dataset.top_descriptor."""
+    rows, cols = dataset.pixel_window(frame, cx, cy, side)
+    crop = frame.value[rows, cols]
+    if transform % 4:
+        crop = np.rot90(crop, transform % 4)
+    if transform >= 4:
+        crop = crop[:, ::-1]
+    return features.second_stage_hog(np.ascontiguousarray(crop), window)
+
+
+def second_stage_examples(frames, species, model, window, rng, survey):
+    """(descriptors, labels) of the second stage from one imagery's learning frames: the positives as the
+    first stage's (augmented crowns), the first stage's negative windows and, on survey frames, the first
+    stage's own false alarms: each group's best window above SECOND_STAGE_SCORE (colour and texture not
+    applied) inside the annotated area that is not a tree window."""
+    x, y = [], []
+    margin = model.window_margin
+    for frame in frames:
+        for box in frame.trees(species):
+            base = dataset.crown_size(box) * margin
+            for copy in range(POSITIVE_COPIES):
+                side = base * np.exp(rng.uniform(-np.log(SIZE_JITTER), np.log(SIZE_JITTER))) if copy else base
+                dx, dy = np.clip(rng.normal(0, CENTRE_JITTER, 2), -2.5 * CENTRE_JITTER, 2.5 * CENTRE_JITTER) * side
+                cx, cy = box.x_center + dx, box.y_center + dy
+                if side >= features.HOG_WINDOW and frame.window_fits(cx, cy, side):
+                    x.append(second_descriptor(frame, cx, cy, side, window, rng.randint(8)))
+                    y.append(1)
+        for cx, cy, side in negative_windows(frame, species, margin, rng, survey):
+            x.append(second_descriptor(frame, cx, cy, side, window, rng.randint(8)))
+            y.append(-1)
+        if survey:
+            for _score, cx, cy, side in first_stage_false_alarms(frame, species, model):
+                x.append(second_descriptor(frame, cx, cy, side, window, rng.randint(8)))
+                y.append(-1)
+    return np.array(x, np.float32).reshape(-1, features.hog_descriptor_length(window)), np.array(y)
+
+
+def first_stage_false_alarms(frame, species, model):
+    """[(score, cx, cy, side)]: the first stage's group-best windows on a survey frame at its crown scale."""
+    crown = frame.typical_crown()
+    sizes = sorted(set(max(features.HOG_WINDOW, int(round(crown * model.window_margin * spread)))
+                       for spread in SECOND_STAGE_SPREAD))
+    sizes = tuple(s for s in sizes if s <= min(frame.width, frame.height))
+    if not sizes:
+        return []
+    detector = detector_core.TreeDetector(model, detector_core.DetectorSettings(
+        window_sizes=sizes, max_detections=None, svm_threshold=SECOND_STAGE_SCORE, hs_threshold=-2.0,
+        variance_threshold=-1.0))
+    trace = {}
+    detector.detections_from_maps(detector.score_maps(frame.value), frame.hsv, frame.value, trace)
+    return [c for c in trace["nms"] if frame.in_area(c[1], c[2])
+            and not dataset.is_tree_window(frame, species, c[1], c[2], c[3], model.window_margin, 0.25, 1.6)]
