@@ -70,8 +70,9 @@ def _kmeans(points, k, rng, iterations=25):
     return centres
 
 
-def positive_descriptors(frames, species, margin, rng):
-    out = []
+def positive_windows(frames, species, margin, rng):
+    """(frame, cx, cy, side, transform) of the augmented positives: POSITIVE_COPIES per complete tree, all but
+    the first with size and centre jitter, each in a random rotation/mirror (0..7)."""
     for frame in frames:
         for box in frame.trees(species):
             base = dataset.crown_size(box) * margin
@@ -80,7 +81,12 @@ def positive_descriptors(frames, species, margin, rng):
                 dx, dy = np.clip(rng.normal(0, CENTRE_JITTER, 2), -2.5 * CENTRE_JITTER, 2.5 * CENTRE_JITTER) * side
                 cx, cy = box.x_center + dx, box.y_center + dy
                 if side >= features.HOG_WINDOW and frame.window_fits(cx, cy, side):
-                    out.append(dataset.top_descriptor(frame, cx, cy, side, transform=rng.randint(8)))
+                    yield frame, cx, cy, side, rng.randint(8)
+
+
+def positive_descriptors(frames, species, margin, rng):
+    out = [dataset.top_descriptor(frame, cx, cy, side, transform=transform)
+           for frame, cx, cy, side, transform in positive_windows(frames, species, margin, rng)]
     return np.array(out, np.float32).reshape(-1, features.hog_descriptor_length())
 
 
@@ -245,15 +251,9 @@ def second_stage_examples(frames, species, model, window, rng, survey):
     x, y = [], []
     margin = model.window_margin
     for frame in frames:
-        for box in frame.trees(species):
-            base = dataset.crown_size(box) * margin
-            for copy in range(POSITIVE_COPIES):
-                side = base * np.exp(rng.uniform(-np.log(SIZE_JITTER), np.log(SIZE_JITTER))) if copy else base
-                dx, dy = np.clip(rng.normal(0, CENTRE_JITTER, 2), -2.5 * CENTRE_JITTER, 2.5 * CENTRE_JITTER) * side
-                cx, cy = box.x_center + dx, box.y_center + dy
-                if side >= features.HOG_WINDOW and frame.window_fits(cx, cy, side):
-                    x.append(second_descriptor(frame, cx, cy, side, window, rng.randint(8)))
-                    y.append(1)
+        for _frame, cx, cy, side, transform in positive_windows([frame], species, margin, rng):
+            x.append(second_descriptor(frame, cx, cy, side, window, transform))
+            y.append(1)
         for cx, cy, side in negative_windows(frame, species, margin, rng, survey):
             x.append(second_descriptor(frame, cx, cy, side, window, rng.randint(8)))
             y.append(-1)
