@@ -11,6 +11,7 @@ CALIBRATION_CROPS = 200  # of each class
 MIN_RECALL = 0.97  # calibrated crop recall at least this (paper: 96.06 %)
 SVM_THRESHOLDS = (-1.5, -1.2, -1.0, -0.8, -0.6, -0.45, -0.3, -0.15, 0.0, 0.15, 0.3)
 CUE_QUANTILES = (0.0, 0.01, 0.02, 0.03, 0.05, 0.08, 0.12)
+SECOND_THRESHOLDS = (-1.0, -0.75, -0.5, -0.25, 0.0)  # second-stage thresholds searched (models with one)
 EDGE_THRESHOLDS = (-1.0, -0.5, 0.0, 0.5)  # candidates for the frame-edge test, searched on whole frames
 CROWN_RATIO_CENTRES = (0.9, 1.0, 1.1, 1.2, 1.3, 1.4, 1.5)  # window / crown, searched on whole survey frames
 CROWN_RATIO_SPREAD = (0.85, 1.0, 1.18)  # three window sizes around each centre (crowns vary in a frame)
@@ -31,24 +32,30 @@ def calibrate(model, domain_index, frames, rng, log):
     cues = np.array([evaluation.frame_window_cues(model, domain_index, f, cx, cy, side)
                      for f, cx, cy, side, _positive in crops])
     scores, similarities, variances = cues[:, 0], cues[:, 1], cues[:, 2]
+    has_second = model.second_window is not None
+    seconds = np.array([evaluation.frame_second_score(model, f, cx, cy, side) if has_second else 0.0
+                        for f, cx, cy, side, _positive in crops])
     best = None
     for svm in SVM_THRESHOLDS:
         for hs_q in CUE_QUANTILES:
             hs = below_quantile(similarities[labels], hs_q)
             for var_q in CUE_QUANTILES:
                 var = below_quantile(variances[labels], var_q)
-                predicted = detector_core.passes_thresholds(scores, similarities, variances, svm, hs, var)
-                recall = (predicted & labels).sum() / float(labels.sum())
-                accuracy = 0.5 * (recall + (~predicted & ~labels).sum() / float((~labels).sum()))  # balanced
-                key = (recall >= MIN_RECALL, accuracy, recall, -abs(svm))
-                if best is None or key > best[0]:
-                    best = (key, svm, hs, var)
+                first = detector_core.passes_thresholds(scores, similarities, variances, svm, hs, var)
+                for second in (SECOND_THRESHOLDS if has_second else (0.0,)):
+                    predicted = first & (seconds > second) if has_second else first
+                    recall = (predicted & labels).sum() / float(labels.sum())
+                    accuracy = 0.5 * (recall + (~predicted & ~labels).sum() / float((~labels).sum()))  # balanced
+                    key = (recall >= MIN_RECALL, accuracy, recall, -abs(svm), -abs(second))
+                    if best is None or key > best[0]:
+                        best = (key, svm, hs, var, second)
     log("%s: calibration positives %d, negatives %d; positive SVM scores 2/5/10 %% quantiles %s"
         % (domain.name, labels.sum(), (~labels).sum(), np.round(np.percentile(scores[labels], [2, 5, 10]), 2)))
-    (_ok, accuracy, recall, _svm), domain.svm_threshold, domain.hs_threshold, domain.variance_threshold = best
-    log("%s: calibration on %d crops: accuracy %.3f recall %.3f at svm %.2f, colour %.3f, var %.4g"
+    (_ok, accuracy, recall, _svm, _second), domain.svm_threshold, domain.hs_threshold, domain.variance_threshold, \
+        domain.second_threshold = best
+    log("%s: calibration on %d crops: accuracy %.3f recall %.3f at svm %.2f, colour %.3f, var %.4g%s"
         % (domain.name, len(crops), accuracy, recall, domain.svm_threshold, domain.hs_threshold,
-           domain.variance_threshold))
+           domain.variance_threshold, ", second stage %.2f" % domain.second_threshold if has_second else ""))
 
 
 def calibrate_edge(model, imagery_frames, log):
@@ -78,41 +85,53 @@ def calibrate_frames(model, imagery_frames, log):
     area; the best mean frame F1 over the imageries wins, ties to the ratio nearest the training margin and
     the crop protocol's threshold. Score maps do not depend on the threshold: one scan per frame and ratio."""
     crop_thresholds = {d.name: d.svm_threshold for d in model.domains}
+    crop_seconds = {d.name: d.second_threshold for d in model.domains}
+    seconds = SECOND_THRESHOLDS if model.second_window is not None else (None,)
     best = None
     for centre in CROWN_RATIO_CENTRES:
         model.crown_ratios = tuple(round(centre * spread, 4) for spread in CROWN_RATIO_SPREAD)
         chosen, f1s = {}, []
         for name, frames in imagery_frames:
-            candidates = sorted(set((crop_thresholds[name],) + SVM_THRESHOLDS))
+            candidates = [(t, t2) for t in sorted(set((crop_thresholds[name],) + SVM_THRESHOLDS))
+                          for t2 in (sorted(set((crop_seconds[name],) + seconds)) if seconds[0] is not None
+                                     else seconds)]
             counts = dict((t, [0, 0, 0]) for t in candidates)  # hits, false alarms, misses
             for frame in frames:
                 windows = evaluation.frame_window_sizes(model, frame, "boxes")
-                scanner = detector_core.TreeDetector(model, detector_core.DetectorSettings(
+                detector = detector_core.TreeDetector(model, detector_core.DetectorSettings(
                     window_sizes=windows, max_detections=None, domain=name))
-                maps = scanner.score_maps(frame.value)
+                maps = detector.score_maps(frame.value)  # once per frame; second-stage scores kept
                 for threshold in candidates:
-                    detector = detector_core.TreeDetector(model, detector_core.DetectorSettings(
-                        svm_threshold=threshold, window_sizes=windows, max_detections=None, domain=name))
+                    detector.settings.svm_threshold, detector.settings.second_threshold = threshold
                     detections = [d for d in detector.detections_from_maps(maps, frame.hsv, frame.value)
                                   if frame.in_area(d.x, d.y)]
                     hits, false_alarms, misses = evaluation.match_detections(detections, frame.trees(model.species))
                     for i, n in enumerate((len(hits), len(false_alarms), len(misses))):
                         counts[threshold][i] += n
-            scored = [(_f1(*counts[t]), -abs(t - crop_thresholds[name]), t) for t in candidates]
-            f1, _closeness, chosen[name] = max(scored)
+            scored = [(_f1(*counts[t]), -abs(t[0] - crop_thresholds[name]),
+                       -abs((t[1] or 0.0) - crop_seconds[name]), t) for t in candidates]
+            f1, _closeness, _second_closeness, chosen[name] = max(scored)
             f1s.append(f1)
         key = (round(float(np.mean(f1s)), 6), -abs(centre - model.window_margin))
         log("crown ratios %s: frame F1 %s at SVM thresholds %s"
             % (", ".join("%.2f" % r for r in model.crown_ratios), ", ".join("%.3f" % f for f in f1s),
-               ", ".join("%.2f" % chosen[name] for name, _frames in imagery_frames)))
+               ", ".join(_thresholds_text(chosen[name]) for name, _frames in imagery_frames)))
         if best is None or key > best[0]:
             best = (key, model.crown_ratios, dict(chosen))
     _key, model.crown_ratios, chosen = best
-    for name, threshold in chosen.items():
+    for name, (threshold, second) in chosen.items():
         model.domain(name).svm_threshold = threshold
+        if second is not None:
+            model.domain(name).second_threshold = second
     log("frames: crown ratios %s, SVM thresholds %s (mean frame F1 %.3f)"
         % (", ".join("%.2f" % r for r in model.crown_ratios),
-           ", ".join("%s %.2f" % item for item in chosen.items()), best[0][0]))
+           ", ".join("%s %s" % (name, _thresholds_text(t)) for name, t in chosen.items()), best[0][0]))
+
+
+def _thresholds_text(thresholds):
+    """'-0.30' or '-0.30/-0.50' (SVM / second stage)."""
+    svm, second = thresholds
+    return "%.2f" % svm if second is None else "%.2f/%.2f" % (svm, second)
 
 
 def _f1(hits, false_alarms, misses):

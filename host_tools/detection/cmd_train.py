@@ -120,8 +120,9 @@ def run(args):
         for warning in written["warnings"]:
             print("train: warning: " + warning)
         log("report: %s" % written["path"])
-    thresholds = "; ".join("%s svm %.2f colour %.3f var %.4g" % (d.name, d.svm_threshold, d.hs_threshold,
-                                                                d.variance_threshold) for d in model.domains)
+    thresholds = "; ".join("%s svm %.2f colour %.3f var %.4g%s" % (
+        d.name, d.svm_threshold, d.hs_threshold, d.variance_threshold,
+        "" if model.second_window is None else " second stage %.2f" % d.second_threshold) for d in model.domains)
     print("wrote %s: %s, svm bias %.3f, edge %.2f, crown ratios %s; %s"
           % (args.out, model.notes, model.svm_bias, model.edge_threshold,
              ",".join("%.2f" % r for r in model.crown_ratios), thresholds))

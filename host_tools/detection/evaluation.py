@@ -47,18 +47,34 @@ def frame_window_cues(model, domain_index, frame, cx, cy, side):
     return window_cues(model, domain_index, frame.value[rows, cols], frame.hsv[rows, cols], small)
 
 
-def passes(model, domain_index, cues, settings=None):
-    """Does a window with these cues pass all three tests of the domain (settings override thresholds)?"""
+def passes(model, domain_index, cues, settings=None, second=None):
+    """Does a window with these cues pass all three tests of the domain (settings override thresholds), and
+    the second stage (its score `second`) for a model with one?"""
     detector = detector_core.TreeDetector(model, settings)
     detector.domain_index = domain_index
     score, colour, texture = cues
-    return detector_core.passes_thresholds(score, colour, texture, *detector.thresholds())
+    ok = detector_core.passes_thresholds(score, colour, texture, *detector.thresholds())
+    if model.second_window is not None:
+        ok = ok and second > detector.threshold("second_threshold")
+    return ok
+
+
+def second_score(model, value_window):
+    """The second stage's score of a full-resolution value window (None: the model has none)."""
+    if model.second_window is None:
+        return None
+    return model.second_score(features.second_stage_hog(value_window, model.second_window))
+
+
+def frame_second_score(model, frame, cx, cy, side):
+    rows, cols = dataset.pixel_window(frame, cx, cy, side)
+    return second_score(model, frame.value[rows, cols])
 
 
 def classify_window(model, value, hsv, settings=None, small=None, domain_index=0):
     """(is_tree, svm score, colour score, texture) of one window (see window_cues)."""
     cues = window_cues(model, domain_index, value, hsv, small)
-    return (passes(model, domain_index, cues, settings),) + tuple(cues)
+    return (passes(model, domain_index, cues, settings, second_score(model, value)),) + tuple(cues)
 
 
 def nearest_domain(model, hsv):
@@ -173,7 +189,8 @@ def evaluate_frame_crops(model, crops, settings=None):
         if id(frame) not in domains:
             domains[id(frame)] = _domain_index(model, settings, frame.hsv)
         cues = frame_window_cues(model, domains[id(frame)], frame, cx, cy, side)
-        predictions.append(passes(model, domains[id(frame)], cues, settings))
+        predictions.append(passes(model, domains[id(frame)], cues, settings,
+                                  frame_second_score(model, frame, cx, cy, side)))
         labels.append(positive)
     return crop_metrics(labels, predictions)
 
@@ -204,7 +221,7 @@ def match_detections(detections, truths):
     return hits, false_positives, unmatched
 
 
-FUNNEL_STAGES = ("svm", "peak", "cap", "nms", "colour", "texture")
+FUNNEL_STAGES = ("svm", "peak", "cap", "nms", "colour", "second", "texture")  # second: = colour without one
 
 
 def frame_window_sizes(model, frame, crown_px):
@@ -224,7 +241,7 @@ def frame_window_sizes(model, frame, crown_px):
 def _funnel(trace, truths, settings_threshold):
     """How many of the truths survive each stage: a window centred in the box scoring above the SVM
     threshold; a score-map peak; a peak within the candidate cap; a group's best window after NMS; the
-    colour test; the texture test (a detection)."""
+    colour test; the second stage (models with one); the texture test (a detection)."""
     def centred(items, box):
         return any(abs(c[1] - box.x_center) <= box.width / 2.0 and abs(c[2] - box.y_center) <= box.height / 2.0
                    for c in items)
@@ -235,7 +252,7 @@ def _funnel(trace, truths, settings_threshold):
             x0, y0 = plan.window_origin(row, col)
             windows.append((0.0, x0 + plan.window / 2.0, y0 + plan.window / 2.0, plan.window))
     stages = {"svm": windows, "peak": trace["peaks"], "cap": trace["capped"], "nms": trace["nms"],
-              "colour": trace["colour"]}
+              "colour": trace["colour"], "second": trace["second"]}
     return {name: sum(1 for box in truths if centred(items, box)) for name, items in stages.items()}
 
 
@@ -296,7 +313,7 @@ def _with_windows(settings, windows):
         svm_threshold=settings.svm_threshold, variance_threshold=settings.variance_threshold,
         hs_threshold=settings.hs_threshold, window_sizes=windows, step=settings.step,
         nms_overlap=settings.nms_overlap, max_detections=settings.max_detections, smoothing=settings.smoothing,
-        edge_threshold=settings.edge_threshold, domain=settings.domain)
+        edge_threshold=settings.edge_threshold, domain=settings.domain, second_threshold=settings.second_threshold)
     return copy
 
 

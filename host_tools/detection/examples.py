@@ -17,6 +17,7 @@ SHIFTED_PER_TREE = 3
 LOOKALIKE_COPIES = 4  # windows per look-alike object (other species, roofs, road crossings)
 BACKGROUND_PER_FRAME = 6
 HARD_NEGATIVES_PER_FRAME = 10
+SURVEY_HARD_NEGATIVES_PER_CROWN = 1.0  # survey frames hold tens to hundreds of crowns: mine in proportion
 HARD_NEGATIVE_SCORE = -0.5  # windows scoring above this (and not a tree) are mined
 COLOUR_SVM_C = 0.1
 SURVEY_BACKGROUND_SCALE = (0.8, 1.25)  # survey background windows: the imagery's window size x this
@@ -69,8 +70,9 @@ def _kmeans(points, k, rng, iterations=25):
     return centres
 
 
-def positive_descriptors(frames, species, margin, rng):
-    out = []
+def positive_windows(frames, species, margin, rng):
+    """(frame, cx, cy, side, transform) of the augmented positives: POSITIVE_COPIES per complete tree, all but
+    the first with size and centre jitter, each in a random rotation/mirror (0..7)."""
     for frame in frames:
         for box in frame.trees(species):
             base = dataset.crown_size(box) * margin
@@ -79,7 +81,12 @@ def positive_descriptors(frames, species, margin, rng):
                 dx, dy = np.clip(rng.normal(0, CENTRE_JITTER, 2), -2.5 * CENTRE_JITTER, 2.5 * CENTRE_JITTER) * side
                 cx, cy = box.x_center + dx, box.y_center + dy
                 if side >= features.HOG_WINDOW and frame.window_fits(cx, cy, side):
-                    out.append(dataset.top_descriptor(frame, cx, cy, side, transform=rng.randint(8)))
+                    yield frame, cx, cy, side, rng.randint(8)
+
+
+def positive_descriptors(frames, species, margin, rng):
+    out = [dataset.top_descriptor(frame, cx, cy, side, transform=transform)
+           for frame, cx, cy, side, transform in positive_windows(frames, species, margin, rng)]
     return np.array(out, np.float32).reshape(-1, features.hog_descriptor_length())
 
 
@@ -168,7 +175,8 @@ def survey_windows(frame, margin):
 def hard_negatives(frames, species, model, rng, survey=False):
     """Windows the current model scores above HARD_NEGATIVE_SCORE that are not trees of the species (survey
     imagery: at the frame's crown scale, inside its annotated area). Vectorised over each score map: a
-    survey image holds hundreds of thousands of windows."""
+    survey image holds hundreds of thousands of windows. Per frame and round: the best half of the quota and a
+    random half of the rest (camera frames: HARD_NEGATIVES_PER_FRAME; survey frames: hard_negative_quota)."""
     out = []
     for frame in frames:
         windows = survey_windows(frame, model.window_margin) if survey else None
@@ -188,15 +196,23 @@ def hard_negatives(frames, species, model, rng, survey=False):
             values = scores[rows, cols].astype(np.float64)
             found.extend(zip(values[keep].tolist(), cx[keep].tolist(), cy[keep].tolist(),
                              [plan.window] * int(keep.sum())))
-        if len(found) > HARD_NEGATIVES_PER_FRAME:
+        quota = hard_negative_quota(frame, species) if survey else HARD_NEGATIVES_PER_FRAME
+        if len(found) > quota:
             found.sort(key=lambda f: -f[0])
-            keep = found[:HARD_NEGATIVES_PER_FRAME // 2]
-            rest = found[HARD_NEGATIVES_PER_FRAME // 2:]
-            picks = rng.choice(len(rest), HARD_NEGATIVES_PER_FRAME - len(keep), replace=False)
+            keep = found[:quota // 2]
+            rest = found[quota // 2:]
+            picks = rng.choice(len(rest), quota - len(keep), replace=False)
             found = keep + [rest[i] for i in sorted(picks)]
         for _score, cx, cy, side in found:
             out.append(dataset.top_descriptor(frame, cx, cy, side))
     return np.array(out, np.float32).reshape(-1, features.hog_descriptor_length())
+
+
+def hard_negative_quota(frame, species):
+    """Hard negatives mined per round from one survey frame: one per complete crown of the species, at least
+    HARD_NEGATIVES_PER_FRAME. A survey image of 60 crowns has the false alarms of many camera frames; ten per
+    image (the camera frames' quota) left most of them unseen by the SVM."""
+    return max(HARD_NEGATIVES_PER_FRAME, int(round(SURVEY_HARD_NEGATIVES_PER_CROWN * len(frame.trees(species)))))
 
 
 def _area_mask(frame):
@@ -206,3 +222,60 @@ def _area_mask(frame):
     if area is not None:
         cv2.fillConvexPoly(mask, np.round(area.reshape(-1, 2)).astype(np.int32), 1)
     return mask.astype(bool)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# The second stage (survey imagery): a finer HOG of the windows the first stage lets through
+
+
+SECOND_STAGE_SCORE = -1.0  # first-stage group bests above this are the second stage's false alarms to learn
+SECOND_STAGE_SPREAD = (0.85, 1.0, 1.18)  # false alarms at typical crown x margin x these (detection's sizes)
+
+
+def second_descriptor(frame, cx, cy, side, window, transform=0):
+    """foranav_features.second_stage_hog of a frame window; transform 0..7 as dataset.top_descriptor."""
+    rows, cols = dataset.pixel_window(frame, cx, cy, side)
+    crop = frame.value[rows, cols]
+    if transform % 4:
+        crop = np.rot90(crop, transform % 4)
+    if transform >= 4:
+        crop = crop[:, ::-1]
+    return features.second_stage_hog(np.ascontiguousarray(crop), window)
+
+
+def second_stage_examples(frames, species, model, window, rng, survey):
+    """(descriptors, labels) of the second stage from one imagery's learning frames: the positives as the
+    first stage's (augmented crowns), the first stage's negative windows and, on survey frames, the first
+    stage's own false alarms: each group's best window above SECOND_STAGE_SCORE (colour and texture not
+    applied) inside the annotated area that is not a tree window."""
+    x, y = [], []
+    margin = model.window_margin
+    for frame in frames:
+        for _frame, cx, cy, side, transform in positive_windows([frame], species, margin, rng):
+            x.append(second_descriptor(frame, cx, cy, side, window, transform))
+            y.append(1)
+        for cx, cy, side in negative_windows(frame, species, margin, rng, survey):
+            x.append(second_descriptor(frame, cx, cy, side, window, rng.randint(8)))
+            y.append(-1)
+        if survey:
+            for _score, cx, cy, side in first_stage_false_alarms(frame, species, model):
+                x.append(second_descriptor(frame, cx, cy, side, window, rng.randint(8)))
+                y.append(-1)
+    return np.array(x, np.float32).reshape(-1, features.hog_descriptor_length(window)), np.array(y)
+
+
+def first_stage_false_alarms(frame, species, model):
+    """[(score, cx, cy, side)]: the first stage's group-best windows on a survey frame at its crown scale."""
+    crown = frame.typical_crown()
+    sizes = sorted(set(max(features.HOG_WINDOW, int(round(crown * model.window_margin * spread)))
+                       for spread in SECOND_STAGE_SPREAD))
+    sizes = tuple(s for s in sizes if s <= min(frame.width, frame.height))
+    if not sizes:
+        return []
+    detector = detector_core.TreeDetector(model, detector_core.DetectorSettings(
+        window_sizes=sizes, max_detections=None, svm_threshold=SECOND_STAGE_SCORE, hs_threshold=-2.0,
+        variance_threshold=-1.0))
+    trace = {}
+    detector.detections_from_maps(detector.score_maps(frame.value), frame.hsv, frame.value, trace)
+    return [c for c in trace["nms"] if frame.in_area(c[1], c[2])
+            and not dataset.is_tree_window(frame, species, c[1], c[2], c[3], model.window_margin, 0.25, 1.6)]

@@ -36,7 +36,7 @@ from host_tools.detection.examples import (  # noqa: F401
     LOOKALIKE_COPIES, POSITIVE_COPIES, SHIFTED_PER_TREE, SIZE_JITTER, SURVEY_BACKGROUND_SCALE,
     colour_model as _colour_model, crop_descriptors as _crop_descriptors, hard_negatives as _hard_negatives,
     negative_descriptors as _negative_descriptors, negative_windows as _negative_windows,
-    positive_descriptors as _positive_descriptors, survey_windows)
+    positive_descriptors as _positive_descriptors, second_stage_examples as _second_stage_examples, survey_windows)
 from host_tools.detection.svm import train_linear_svm
 
 import foranav_features as features
@@ -44,6 +44,8 @@ from foranav_model import Domain, TreeModel
 
 DEFAULT_WINDOW_SIZES = (96, 120, 144, 168)  # at 352 px frame width, margin 1.3: crowns of about 60-155 px
 DEFAULT_REFERENCE_WIDTH = 352
+SECOND_STAGE_WINDOW = features.SECOND_STAGE_WINDOWS[0]
+SECOND_STAGE_C = 1.0
 DEFAULT_MARGIN = 1.3  # window side / crown diameter: the crown plus a ring of ground (its outline)
 HARD_NEGATIVE_ROUNDS = 3
 SVM_C = 1.0
@@ -138,6 +140,8 @@ def train(data, species, seed=0, window_sizes=DEFAULT_WINDOW_SIZES, reference_wi
         if len(hard) == 0:
             break
         negatives = np.vstack([negatives, hard])
+    if any(not camera[im.name] for im in targets):  # survey imagery: camera (rendered) models stay one stage
+        _train_second_stage(model, imageries, learning, camera, species, seed, log)
     for index, imagery in enumerate(targets):
         _calibrate(model, index, calibration[imagery.name] or learning[imagery.name], rng, log)
     camera_targets = [im for im in targets if camera[im.name]]
@@ -157,3 +161,17 @@ def train(data, species, seed=0, window_sizes=DEFAULT_WINDOW_SIZES, reference_wi
                       len(imageries), ", ".join(im.name for im in imageries), len(positives), len(negatives), seed))
     model.validate()
     return model
+
+
+def _train_second_stage(model, imageries, learning, camera, species, seed, log):
+    """The second stage: a linear SVM on SECOND_STAGE_WINDOW px HOG of the learning frames' windows, with
+    the first stage's false alarms on survey frames as negatives (own random stream: the first stage's
+    examples do not change)."""
+    rng = np.random.RandomState(seed + 1)
+    parts = [_second_stage_examples(learning[im.name], species, model, SECOND_STAGE_WINDOW, rng, not camera[im.name])
+             for im in imageries]
+    x = np.vstack([part[0] for part in parts])
+    y = np.concatenate([part[1] for part in parts])
+    model.second_window = SECOND_STAGE_WINDOW
+    model.second_weights, model.second_bias = train_linear_svm(x, y, c=SECOND_STAGE_C, seed=seed)
+    log("second stage: %d px HOG, %d positives, %d negatives" % (SECOND_STAGE_WINDOW, (y > 0).sum(), (y < 0).sum()))

@@ -16,6 +16,8 @@
 #      (rejects roofs, road crossings, other palms' colours), then the bottom layer's contrast-normalised
 #      global HOG histogram on the full-resolution window (foranav_features.hog_texture: rejects other palm
 #      species).
+#      A model trained on survey imagery may add a second stage between the two: a linear SVM on a finer HOG
+#      of the window (foranav_features.second_stage_hog), trained on the first stage's false alarms.
 #   6. A group that passes is one detection; its centre is the score^2-weighted mean of the refined centres
 #      of its members near the best one (a few pixels better than any single window on a lattice).
 # Every threshold is a setting (DetectorSettings) whose default comes from the model file. A model holds one
@@ -50,6 +52,7 @@ class DetectorSettings(object):
     svm_threshold       top-layer linear SVM score a window must exceed (decision boundary = 0)
     variance_threshold  bottom-layer texture cue (foranav_features.hog_texture, 1/px^2) a detection must exceed
     hs_threshold        mean hue/saturation Pearson correlation with the template a detection must exceed
+    second_threshold    second-stage score a detection's window must exceed (models with a second stage)
     window_sizes        sliding-window sides W in pixels of THIS frame (None: the model's, scaled by
                         frame width / model reference width and rounded to a multiple of W_d = 24)
     step                window step in downscaled pixels (1..24; 2 = W/12 default, 8 = W/3 as in the paper)
@@ -69,10 +72,11 @@ class DetectorSettings(object):
 
     def __init__(self, svm_threshold=None, variance_threshold=None, hs_threshold=None, window_sizes=None,
                  step=DEFAULT_STEP, nms_overlap=DEFAULT_NMS_OVERLAP, max_detections=DEFAULT_MAX_DETECTIONS,
-                 smoothing=DEFAULT_SMOOTHING, edge_threshold=None, domain=None):
+                 smoothing=DEFAULT_SMOOTHING, edge_threshold=None, domain=None, second_threshold=None):
         self.svm_threshold = svm_threshold
         self.variance_threshold = variance_threshold
         self.hs_threshold = hs_threshold
+        self.second_threshold = second_threshold
         self.window_sizes = tuple(window_sizes) if window_sizes else None
         self.step = int(step)
         self.nms_overlap = float(nms_overlap)
@@ -207,6 +211,7 @@ class TreeDetector(object):
             weights.transpose(4, 0, 1, 2, 3).reshape(features.HOG_BINS, -1)).astype(np.float32)
         self._bin_tables = [np.ascontiguousarray(features.SOFT_BIN_TABLE_U8[:, b]) for b in range(features.HOG_BINS)]
         self._plans = {}
+        self._second_scores = {}
         self._colour = [features.prepare_colour_vectors(model.colour_kind, d.colour_vectors) for d in model.domains]
         self._fixed_domain = None
         if self.settings.domain is not None:
@@ -268,6 +273,7 @@ class TreeDetector(object):
         """[(plan, score map)] of every window of every size, from the full-resolution value channel."""
         atlas = self._atlas(*value.shape)
         atlas.fill(value)
+        self._second_scores = {}  # a new frame
         return atlas.split(self._score_atlas(atlas))
 
     def detections_from_maps(self, maps, hsv, value, trace=None):
@@ -284,7 +290,7 @@ class TreeDetector(object):
             candidates.extend(_local_maxima(plan, scores, svm_threshold, edge_threshold))
         candidates.sort(key=lambda c: -c[0])
         if trace is not None:
-            trace.update(maps=maps, peaks=list(candidates), nms=[], colour=[], domain=self.domain_index)
+            trace.update(maps=maps, peaks=list(candidates), nms=[], colour=[], second=[], domain=self.domain_index)
         if self.settings.max_detections is not None:
             del candidates[max(MAX_CANDIDATES, CANDIDATES_PER_DETECTION * self.settings.max_detections):]
         if trace is not None:
@@ -303,11 +309,27 @@ class TreeDetector(object):
                 continue
             if trace is not None:
                 trace["colour"].append(group[0])
+            if self.model.second_window is not None and self.second_score(
+                    value[y0:y0 + side, x0:x0 + side], (x0, y0, side)) <= self.threshold("second_threshold"):
+                continue
+            if trace is not None:
+                trace["second"].append(group[0])
             if features.hog_texture(value[y0:y0 + side, x0:x0 + side]) > variance_threshold:
                 detections.append(_fuse(group, svm_threshold, margin))
                 if len(detections) == self.settings.max_detections:
                     break
         return detections
+
+    def second_score(self, value_window, key=None):
+        """The second stage's score of a full-resolution value window (models with a second stage); key: the
+        window's (x0, y0, side) in the frame of the last score_maps, whose scores are kept (host calibration
+        runs the later steps many times on one frame's maps)."""
+        if key is not None and key in self._second_scores:
+            return self._second_scores[key]
+        score = self.model.second_score(features.second_stage_hog(value_window, self.model.second_window))
+        if key is not None:
+            self._second_scores[key] = score
+        return score
 
     def colour_score(self, hsv_window):
         """The window's colour score against the current domain's colour model."""

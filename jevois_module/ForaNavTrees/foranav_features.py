@@ -58,6 +58,7 @@ def _soft_bin_table(n_bins=HOG_BINS, levels=ANGLE_LEVELS):
 
 SOFT_BIN_TABLE = _soft_bin_table()
 SOFT_BIN_TABLE_U8 = np.round(SOFT_BIN_TABLE * 255.0).astype(np.uint8)  # votes in 1/255
+_SOFT_BIN_TABLE_F32 = SOFT_BIN_TABLE_U8.astype(np.float32)
 MAGNITUDE_CODE_SCALE = 0.7  # magnitude codes per grey level: the largest [-1,0,1] magnitude, 360.6, -> 252
 VOTE_UNIT = 1.0 / (255.0 * MAGNITUDE_CODE_SCALE)  # grey levels per unit of code x weight
 
@@ -304,6 +305,34 @@ def top_layer_hog(small_value):
             block = cells[r0:r0 + HOG_BLOCK, c0:c0 + HOG_BLOCK].ravel()
             blocks.append(block / np.sqrt(block.dot(block) + BLOCK_NORM_EPS ** 2))
     return np.concatenate(blocks).astype(np.float32)
+
+
+SECOND_STAGE_WINDOWS = (48,)  # side of the second stage's downscaled window (multiples of HOG_CELL)
+
+
+def second_stage_hog(value_window, side):
+    """HOG of one full-resolution value window downscaled to side x side (the second stage's descriptor):
+    the top layer's cells, blocks, bins and norms at twice its resolution, so the leaflets of a crown and
+    the gap to its neighbours show. Length hog_descriptor_length(side) (2916 for 48)."""
+    if side % HOG_CELL or side < HOG_BLOCK * HOG_CELL:
+        raise ValueError("second-stage window must be a multiple of %d px, at least %d"
+                         % (HOG_CELL, HOG_BLOCK * HOG_CELL))
+    small = cv2.resize(np.asarray(value_window), (side, side), interpolation=cv2.INTER_AREA)
+    codes, levels = gradient_levels(cv2.copyMakeBorder(small, 1, 1, 1, 1, cv2.BORDER_REPLICATE))
+    codes, levels = codes[1:-1, 1:-1], levels[1:-1, 1:-1]
+    n_cells = side // HOG_CELL
+    # cell histograms of all cells at once: per-pixel soft votes, summed over each cell
+    votes = _SOFT_BIN_TABLE_F32[levels] * codes.astype(np.float32)[:, :, None]
+    cells = votes.reshape(n_cells, HOG_CELL, n_cells, HOG_CELL, HOG_BINS).sum(axis=(1, 3)) * VOTE_UNIT
+    n_blocks = (n_cells - HOG_BLOCK) // HOG_BLOCK_STRIDE + 1
+    blocks = np.empty((n_blocks, n_blocks, HOG_BLOCK, HOG_BLOCK, HOG_BINS), np.float32)
+    for r in range(HOG_BLOCK):
+        for c in range(HOG_BLOCK):
+            blocks[:, :, r, c] = cells[r:r + n_blocks * HOG_BLOCK_STRIDE:HOG_BLOCK_STRIDE,
+                                       c:c + n_blocks * HOG_BLOCK_STRIDE:HOG_BLOCK_STRIDE]
+    blocks = blocks.reshape(n_blocks * n_blocks, -1)
+    norms = np.sqrt((blocks * blocks).sum(axis=1) + BLOCK_NORM_EPS ** 2)
+    return (blocks / norms[:, None]).ravel().astype(np.float32)
 
 
 def window_with_context(value, x0, y0, window):

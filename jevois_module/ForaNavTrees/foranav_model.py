@@ -35,6 +35,12 @@
 #   seed             int      training seed (provenance)
 #   notes            str      free text: data, counts, figures (provenance)
 #   provenance       str      sources and licences of the training imagery
+# Optional (all four or none; models trained on survey imagery): the second stage, a linear SVM on a finer
+# HOG (foranav_features.second_stage_hog) that each group's best window must also pass.
+#   second_window    int      side of its downscaled window (48)
+#   second_weights   f32[n]   its weights (n = hog_descriptor_length(second_window))
+#   second_bias      f32
+#   second_threshold f32[D]   per domain, the score a detection's window must exceed
 import zipfile
 
 import numpy as np
@@ -61,6 +67,8 @@ COLOUR_LENGTH = 2 * features.HS_BINS
 LFS_POINTER_PREFIX = b"version https://git-lfs"
 NPZ_MAGIC = b"PK\x03\x04"
 NPY_MAGIC = b"\x93NUMPY"
+SECOND_STAGE_KEYS = ("second_window", "second_weights", "second_bias", "second_threshold")
+SECOND_STAGE_KINDS = {"second_window": "iu", "second_weights": "fiu", "second_bias": "fiu", "second_threshold": "fiu"}
 
 
 class ModelFormatError(ValueError):
@@ -77,8 +85,9 @@ class Domain(object):
     """One imagery's colour model and thresholds (see the module comment)."""
 
     def __init__(self, name, svm_threshold, hs_threshold, variance_threshold, colour_vectors, colour_bias=0.0,
-                 frame_colour=None):
+                 frame_colour=None, second_threshold=0.0):
         self.name = str(name)
+        self.second_threshold = float(second_threshold)  # used only by a model with a second stage
         self.svm_threshold = float(svm_threshold)
         self.hs_threshold = float(hs_threshold)
         self.variance_threshold = float(variance_threshold)
@@ -93,7 +102,8 @@ class Domain(object):
             raise ModelFormatError("domain name %r must be one word" % self.name)
         if self.frame_colour.shape != (COLOUR_LENGTH,) or len(self.colour_vectors) == 0:
             raise ModelFormatError("domain %s: colour vectors must have %d values" % (self.name, COLOUR_LENGTH))
-        values = [self.svm_threshold, self.hs_threshold, self.variance_threshold, self.colour_bias]
+        values = [self.svm_threshold, self.hs_threshold, self.variance_threshold, self.colour_bias,
+                  self.second_threshold]
         if not (np.all(np.isfinite(values)) and np.all(np.isfinite(self.colour_vectors))
                 and np.all(np.isfinite(self.frame_colour))):
             raise ModelFormatError("domain %s: numbers must be finite" % self.name)
@@ -110,7 +120,8 @@ class TreeModel(object):
     def __init__(self, species, svm_weights, svm_bias, svm_threshold=0.0, variance_threshold=0.0,
                  hs_threshold=-1.0, template_hue=None, template_sat=None, window_sizes=(96,), window_margin=1.3,
                  reference_width=352, seed=0, notes="", edge_threshold=DEFAULT_EDGE_THRESHOLD, domains=None,
-                 colour_kind="templates", crown_ratios=None, provenance="", domain_name="default"):
+                 colour_kind="templates", crown_ratios=None, provenance="", domain_name="default",
+                 second_window=None, second_weights=None, second_bias=0.0):
         self.species = str(species)
         self.svm_weights = np.asarray(svm_weights, np.float32).ravel()
         self.svm_bias = float(svm_bias)
@@ -134,6 +145,9 @@ class TreeModel(object):
         self.seed = int(seed)
         self.notes = str(notes)
         self.provenance = str(provenance)
+        self.second_window = None if second_window is None else int(second_window)
+        self.second_weights = None if second_weights is None else np.asarray(second_weights, np.float32).ravel()
+        self.second_bias = float(second_bias)
         self.validate()
 
     # The first domain's values (single-imagery models, the camera's settings, older callers).
@@ -176,6 +190,17 @@ class TreeModel(object):
         counts = set(len(d.colour_vectors) for d in self.domains)
         if len(counts) != 1 or (self.colour_kind == "linear" and counts != {1}):
             raise ModelFormatError("every domain needs the same number of colour vectors (linear: 1)")
+        if (self.second_window is None) != (self.second_weights is None):
+            raise ModelFormatError("a second stage needs its window and its weights")
+        if self.second_window is not None:
+            if self.second_window % features.HOG_CELL or self.second_window < features.HOG_BLOCK * features.HOG_CELL:
+                raise ModelFormatError("second_window must be a multiple of %d px" % features.HOG_CELL)
+            length = features.hog_descriptor_length(self.second_window)
+            if self.second_weights.shape != (length,):
+                raise ModelFormatError("second_weights has %d values, its HOG has %d" % (self.second_weights.size,
+                                                                                        length))
+            if not np.all(np.isfinite(self.second_weights)) or not np.isfinite(self.second_bias):
+                raise ModelFormatError("second-stage numbers must be finite")
         values = [self.svm_bias, self.edge_threshold, self.window_margin] + list(self.svm_weights)
         values += list(self.crown_ratios)
         if (not np.all(np.isfinite(values)) or self.window_margin <= 0 or self.reference_width <= 0
@@ -187,7 +212,19 @@ class TreeModel(object):
         """SVM decision value of one top-layer descriptor (positive = tree-like)."""
         return float(np.dot(self.svm_weights, descriptor)) + self.svm_bias
 
+    def second_score(self, descriptor):
+        """The second stage's decision value of one descriptor (foranav_features.second_stage_hog)."""
+        return float(np.dot(self.second_weights, descriptor)) + self.second_bias
+
     def to_arrays(self):
+        arrays = self._core_arrays()
+        if self.second_window is not None:  # only then: a model without one keeps its bytes
+            arrays.update(second_window=np.array(self.second_window, np.int32), second_weights=self.second_weights,
+                          second_bias=np.array(self.second_bias, np.float32),
+                          second_threshold=np.array([d.second_threshold for d in self.domains], np.float32))
+        return arrays
+
+    def _core_arrays(self):
         domains = self.domains
         return {
             "format_version": np.array(FORMAT_VERSION, np.int32),
@@ -320,16 +357,36 @@ def model_from_arrays(arrays, name="model"):
         frame_colour = np.asarray(arrays["frame_colour"], np.float32)
         if frame_colour.shape != (count, COLOUR_LENGTH):
             raise ModelFormatError("frame_colour must be (%d domains, %d)" % (count, COLOUR_LENGTH))
+        second = _second_stage(arrays, count)
         domains = [Domain(names[i], per_domain["svm_threshold"][i], per_domain["hs_threshold"][i],
                           per_domain["variance_threshold"][i], vectors[i], per_domain["colour_bias"][i],
-                          frame_colour[i]) for i in range(count)]
+                          frame_colour[i], second["threshold"][i]) for i in range(count)]
         return TreeModel(
             species=str(arrays["species"]), svm_weights=arrays["svm_weights"], svm_bias=float(arrays["svm_bias"]),
             edge_threshold=float(arrays["edge_threshold"]), colour_kind=str(arrays["colour_kind"]),
             domains=domains, window_sizes=arrays["window_sizes"], window_margin=float(arrays["window_margin"]),
             reference_width=int(arrays["reference_width"]), crown_ratios=arrays["crown_ratios"],
-            seed=int(arrays["seed"]), notes=str(arrays["notes"]), provenance=str(arrays["provenance"]))
+            seed=int(arrays["seed"]), notes=str(arrays["notes"]), provenance=str(arrays["provenance"]),
+            second_window=second["window"], second_weights=second["weights"], second_bias=second["bias"])
     except ModelFormatError as err:
         raise ModelFormatError("%s: %s" % (name, err))
     except (TypeError, ValueError, IndexError) as err:
         raise ModelFormatError("%s: a field has the wrong type or shape (%s)" % (name, err))
+
+
+def _second_stage(arrays, count):
+    """The optional second stage's fields: all four keys or none (window None: no second stage)."""
+    present = [key for key in SECOND_STAGE_KEYS if key in arrays]
+    if not present:
+        return {"window": None, "weights": None, "bias": 0.0, "threshold": [0.0] * count}
+    if len(present) != len(SECOND_STAGE_KEYS):
+        raise ModelFormatError("second stage incomplete (missing %s)"
+                               % ", ".join(k for k in SECOND_STAGE_KEYS if k not in arrays))
+    for key, kinds in SECOND_STAGE_KINDS.items():
+        if arrays[key].dtype.kind not in kinds:
+            raise ModelFormatError("field %s has the wrong type (%s)" % (key, arrays[key].dtype))
+    threshold = np.asarray(arrays["second_threshold"], np.float64).ravel()
+    if threshold.shape != (count,):
+        raise ModelFormatError("second_threshold must have one value per domain (%d)" % count)
+    return {"window": int(arrays["second_window"]), "weights": arrays["second_weights"],
+            "bias": float(arrays["second_bias"]), "threshold": list(threshold)}
