@@ -65,6 +65,14 @@ class FlightApp(Protocol):
 
     def format_fixed(self, value: float, decimals: int) -> str: ...
 
+    def camera_task(self) -> Iterator[Delay]: ...
+
+
+def app_init(app: FlightApp) -> None:
+    """appInit(): create the app task (``app_main``) and the app's camera-input task."""
+    app.cf.x_task_create(app_main(app), "APP", APP_TASK_PRI)
+    app.cf.x_task_create(app.camera_task(), "CAMERA", CAMERA_TASK_PRI)
+
 
 def app_main(app: FlightApp) -> Iterator[Delay]:
     """The app task (appMain): the checks, arming, then the 10 ms control loop; parks when a check fails."""

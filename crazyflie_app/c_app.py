@@ -14,12 +14,13 @@ It has the interface the harness uses of ``navigation.NavigationApp`` (``start``
 ``core.counters``, ``link.lines_dropped``, ``target_x`` ...). The cf must have UART2 attached
 (``cf.attach_uart2(path)``).
 """
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 
-from crazyflie_app.app_main import APP_TASK_PRI, CAMERA_TASK_PERIOD_MS, CAMERA_TASK_PRI, DEBUG_MODULE, app_main
-from crazyflie_app.c_core import CNavigationCore, c_params
+from crazyflie_app.app_main import CAMERA_TASK_PERIOD_MS, DEBUG_MODULE, app_init
+from crazyflie_app.c_core import CFrame, CNavigationCore, CParams, c_params
 from crazyflie_app.firmware.commander import setpoint_t
 from crazyflie_app.firmware.freertos import Delay, m2t, v_task_delay
+from crazyflie_app.firmware.system import Crazyflie
 from crazyflie_app.navigation import LOG_TABLE, PARAM_TABLE
 
 UART2_BAUDRATE = 115200
@@ -30,18 +31,19 @@ UART_READ_TIMEOUT_TICKS = 1
 class _UartLinkStatus:
     """What the harness reads of the app's link: lines dropped for length (C assembler), port opens."""
 
-    def __init__(self, app):
+    def __init__(self, app: "CNavigationApp"):
         self._app = app
 
     lines_dropped = property(lambda self: self._app.core.lines_dropped)
     opens = property(lambda self: self._app.cf.uart2.opens)
 
-    def close(self):
+    def close(self) -> None:
         self._app.cf.uart2.close()
 
 
 class CNavigationApp:
-    def __init__(self, cf, flight_path, serial_url=None, params=None, link=None, target_label=None):
+    def __init__(self, cf: Crazyflie, flight_path: Sequence[tuple[float, float]], serial_url: str | None = None,
+                 params: CParams | None = None, link: object = None, target_label: str | None = None):
         if cf.uart2 is None:
             raise ValueError("CNavigationApp reads UART2: cf.attach_uart2(path) first")
         self.cf = cf
@@ -55,15 +57,11 @@ class CNavigationApp:
         cf.registry.register_param_group(PARAM_TABLE, self.params)
         cf.registry.register_log_group(LOG_TABLE, self)
 
-    def start(self):
-        self.cf.x_task_create(self.app_main(), "APP", APP_TASK_PRI)
-        self.cf.x_task_create(self.camera_task(), "CAMERA", CAMERA_TASK_PRI)
+    def start(self) -> None:
+        """appInit() of foranav_app.c: its appMain (``app_main.app_main``, as the Python app's) and camera task."""
+        app_init(self)
 
-    # -- appMain ----------------------------------------------------------------------------------------------
-
-    def app_main(self) -> Iterator[Delay]:
-        """appMain() of foranav_app.c (``app_main.app_main``, as the Python app)."""
-        return app_main(self)
+    # -- what appMain asks of the app -------------------------------------------------------------------------
 
     def camera_alive(self, now: int) -> bool:
         return self.core.camera_alive(now)
@@ -71,7 +69,7 @@ class CNavigationApp:
     def format_fixed(self, value: float, decimals: int) -> str:
         return self.core.format_fixed(value, decimals)
 
-    def read_pose(self):
+    def read_pose(self) -> tuple[float, ...]:
         cf = self.cf
         return tuple(cf.log_get_float(var_id) for var_id in self.estimate_ids)
 
@@ -83,7 +81,7 @@ class CNavigationApp:
 
     # -- the camera task --------------------------------------------------------------------------------------
 
-    def camera_task(self):
+    def camera_task(self) -> Iterator[Delay]:
         cf = self.cf
         cf.uart2_init(UART2_BAUDRATE)
         while True:
@@ -99,7 +97,7 @@ class CNavigationApp:
             self.print_events()
             yield v_task_delay(m2t(CAMERA_TASK_PERIOD_MS))
 
-    def _frames_done(self, frames, now, pose):
+    def _frames_done(self, frames: list[CFrame], now: int, pose: tuple[float, ...] | None) -> None:
         for detections, ids, points in frames:
             self.last_detection_ms = now
             for (u, v), tree_id, (wx, wy) in zip(detections, ids, points):

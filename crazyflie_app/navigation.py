@@ -1,14 +1,14 @@
 """The ForaNav Bolt navigation app (a port of ``Navigation/Navigation.c``) on the emulated firmware.
 
 The algorithm lives in the pure core (``navigation_core.NavigationCore``, with ``pixel_kalman`` and
-``tree_memory``); this module is the thin firmware layer around it, shaped like the C app: ``app_main`` waits
+``tree_memory``); this module is the thin firmware layer around it, shaped like the C app: ``app_main.app_main`` waits
 for the system, checks the decks, then loops every 10 ms reading ``stateEstimate.*``, stepping the core and
 sending its setpoint at ``COMMANDER_PRIORITY_EXTRX``; ``camera_task`` reads the JeVois lines from the serial
 link and hands each frame's detections to the core. PARAM and LOG tables are declared at the bottom.
 
 C -> Python names (Navigation.c -> here)::
 
-    appMain()                          NavigationApp.app_main()  (a task generator)
+    appMain()                          app_main.app_main(app)  (a task generator, shared with the C app)
     setHoverSetpoint(sp, vx, vy, z, yaw)
                                        set_hover_setpoint(sp, vx, vy, z, yaw)  (body velocity, abs z and yaw)
     memset(&setpoint, 0, ...)          set_null_setpoint(sp)  (motors off)
@@ -51,19 +51,20 @@ use the estimate at *capture* time (``camLatency``); serial text lines (JeVois s
 replace the CPX bytes, so the 255-column byte limit of the C protocol is gone.
 """
 import math
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 
 from jevois_module.ForaNavTrees import foranav_serial
-from crazyflie_app.app_main import (APP_TASK_PRI, CAMERA_TASK_PERIOD_MS, CAMERA_TASK_PRI, DEBUG_MODULE, app_main,
-                                    format_fixed)
+from crazyflie_app.app_main import CAMERA_TASK_PERIOD_MS, DEBUG_MODULE, app_init, format_fixed
 from crazyflie_app.app_main import BOOT_DELAY_MS, PRE_TAKEOFF_DELAY_MS  # noqa: F401 (the app's boot timing)
 from crazyflie_app.firmware.commander import setpoint_t
 from crazyflie_app.firmware.freertos import Delay, m2t, v_task_delay
 from crazyflie_app.firmware.logparam import (LOG_FLOAT, LOG_UINT8, LOG_UINT16, LOG_UINT32, PARAM_FLOAT, PARAM_UINT8,
                                               PARAM_UINT16, PARAM_UINT32, log_add, log_group, param_add, param_group)
+from crazyflie_app.firmware.system import Crazyflie
 from crazyflie_app.navigation_core import (PHASE_DONE, PHASE_NO_CAMERA, Detection, NavigationCore,
                                            NavigationParams, Pose)
 from crazyflie_app.serial_link import SerialLink
+from crazyflie_app.uart2_link import Uart2Link
 
 
 class NavigationApp:
@@ -74,7 +75,9 @@ class NavigationApp:
     of ``N2`` lines to act on (``T2`` lines carry no label and are always taken).
     """
 
-    def __init__(self, cf, flight_path, serial_url, params=None, link=None, target_label=None):
+    def __init__(self, cf: Crazyflie, flight_path: Sequence[tuple[float, float]], serial_url: str | None,
+                 params: NavigationParams | None = None, link: SerialLink | Uart2Link | None = None,
+                 target_label: str | None = None):
         self.cf = cf
         self.target_label = target_label  # N2 lines with another label are ignored (None: accept all)
         self.other_labels = 0
@@ -92,24 +95,19 @@ class NavigationApp:
         cf.registry.register_param_group(PARAM_TABLE, self.params)
         cf.registry.register_log_group(LOG_TABLE, self)
 
-    def start(self):
-        """appInit(): create the app task and the camera-input task."""
-        self.cf.x_task_create(self.app_main(), "APP", APP_TASK_PRI)
-        self.cf.x_task_create(self.camera_task(), "CAMERA", CAMERA_TASK_PRI)
+    def start(self) -> None:
+        """appInit(): the app task (``app_main.app_main``: checks, arming, the 10 ms loop) and the camera task."""
+        app_init(self)
 
-    # -- the app task -------------------------------------------------------------------------------------
+    # -- what the app task asks of the app ----------------------------------------------------------------
 
-    def app_main(self) -> Iterator[Delay]:
-        """appMain(): boot, checks, arming, then the 10 ms control loop (``app_main.app_main``)."""
-        return app_main(self)
-
-    def camera_alive(self, now):
+    def camera_alive(self, now: int) -> bool:
         """Pre-flight check: a valid camera message within app.linkHoldMs (app.camWaitMs 0: no check)."""
         if self.params.camera_wait_ms <= 0:
             return True
         return self.last_heard_ms >= 0 and now - self.last_heard_ms <= self.params.link_hold_ms
 
-    def read_pose(self):
+    def read_pose(self) -> Pose:
         return Pose(*[self.cf.log_get_float(var_id) for var_id in self.estimate_ids])
 
     format_fixed = staticmethod(format_fixed)  # the console's number format
@@ -131,7 +129,7 @@ class NavigationApp:
 
     # -- the camera-input task ----------------------------------------------------------------------------
 
-    def camera_task(self):
+    def camera_task(self) -> Iterator[Delay]:
         while True:
             for line in self.link.poll(self.cf.x_task_get_tick_count()):
                 self.on_camera_line(line)
@@ -140,7 +138,7 @@ class NavigationApp:
                 self._end_frame()  # a camera without frame marks: each batch of lines is one frame
             yield v_task_delay(m2t(CAMERA_TASK_PERIOD_MS))
 
-    def on_camera_line(self, line):
+    def on_camera_line(self, line: bytes) -> None:
         """One received line: T2/N2 detections are kept for the frame, MARK START/STOP delimit frames, and
         everything else (OK, ERR ..., ALIVE, noise) is ignored."""
         message = foranav_serial.parse_line(line)
@@ -161,7 +159,7 @@ class NavigationApp:
             self._frame.append(Detection(foranav_serial.std_to_img_x(message.x, p.cam_width_px),
                                          foranav_serial.std_to_img_y(message.y, p.cam_height_px)))
 
-    def _bound_frame(self):
+    def _bound_frame(self) -> bool:
         """Keep the frame being received within app.frameCap (a PARAM that may be lowered in flight); True
         if there is room for one more detection."""
         cap = max(0, int(self.params.frame_capacity))
@@ -170,7 +168,7 @@ class NavigationApp:
             del self._frame[cap:]
         return len(self._frame) < cap
 
-    def _end_frame(self):
+    def _end_frame(self) -> None:
         if not self._frame or self.core.phase in (PHASE_DONE, PHASE_NO_CAMERA) \
                 or self.estimate_ids is None:
             self._frame = []
