@@ -1,14 +1,18 @@
 """Training examples of a detector model (steps 1-3 of host_tools.detection.training): the descriptors of
 positive windows (augmented), negative windows (look-alikes, shifted, wrongly sized, background), ready-made
 crops and hard negatives mined with the current model, and each imagery's colour model."""
+from collections.abc import Sequence
+
 import cv2
 import numpy as np
 
 from host_tools.detection import dataset
+from host_tools.detection.dataset import Frame
 from host_tools.detection.svm import train_linear_svm
 
 import foranav_detector as detector_core
 import foranav_features as features
+from foranav_model import TreeModel
 
 SIZE_JITTER = 1.2  # positives drawn at crown x margin x [1/J, J]: covers the gaps between window sizes
 CENTRE_JITTER = 0.05  # of W, standard deviation (clipped at 2.5 sigma): a complete tree need not be centred
@@ -22,7 +26,8 @@ COLOUR_SVM_C = 0.1
 SURVEY_BACKGROUND_SCALE = (0.8, 1.25)  # survey background windows: the imagery's window size x this
 
 
-def colour_model(frames, species, margin, kind, templates, rng, survey):
+def colour_model(frames: Sequence[Frame], species: str, margin: float, kind: str, templates: int,
+                 rng: np.random.Generator, survey: bool) -> tuple[np.ndarray, float]:
     """(colour vectors, bias) of one imagery: K templates (K = 1: the mean histogram of the crowns' colour
     regions; more: seeded k-means of them), or a linear classifier of crowns against the imagery's other
     windows (look-alikes, windows cutting a crown, background)."""
@@ -55,7 +60,7 @@ def colour_model(frames, species, margin, kind, templates, rng, survey):
     return weights[None, :], bias
 
 
-def _kmeans(points, k, rng, iterations=25):
+def _kmeans(points: np.ndarray, k: int, rng: np.random.Generator, iterations: int = 25) -> np.ndarray:
     """Seeded k-means (k-means++ start) of histogram vectors -> (k, d) centres."""
     centres = [points[rng.randint(len(points))]]
     for _ in range(1, k):
@@ -69,7 +74,8 @@ def _kmeans(points, k, rng, iterations=25):
     return centres
 
 
-def positive_descriptors(frames, species, margin, rng):
+def positive_descriptors(frames: Sequence[Frame], species: str, margin: float,
+                         rng: np.random.Generator) -> np.ndarray:
     out = []
     for frame in frames:
         for box in frame.trees(species):
@@ -83,7 +89,7 @@ def positive_descriptors(frames, species, margin, rng):
     return np.array(out, np.float32).reshape(-1, features.hog_descriptor_length())
 
 
-def crop_descriptors(crops, rng):
+def crop_descriptors(crops: Sequence, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
     """Descriptors of crop images (each one window; positives in 4 of their 8 rotations/mirrors)."""
     positives, negatives = [], []
     for bgr, positive in crops:
@@ -97,7 +103,8 @@ def crop_descriptors(crops, rng):
     return (np.array(positives, np.float32).reshape(-1, length), np.array(negatives, np.float32).reshape(-1, length))
 
 
-def negative_descriptors(frames, species, margin, rng, survey=False):
+def negative_descriptors(frames: Sequence[Frame], species: str, margin: float, rng: np.random.Generator,
+                         survey: bool = False) -> np.ndarray:
     out = []
     for frame in frames:
         for cx, cy, side in negative_windows(frame, species, margin, rng, survey):
@@ -105,7 +112,8 @@ def negative_descriptors(frames, species, margin, rng, survey=False):
     return np.array(out, np.float32).reshape(-1, features.hog_descriptor_length())
 
 
-def negative_windows(frame, species, margin, rng, survey=False):
+def negative_windows(frame: Frame, species: str, margin: float, rng: np.random.Generator,
+                     survey: bool = False) -> list[tuple[float, float, int]]:
     """Negative windows of a frame. Survey imagery (survey=True): background at the imagery's crown scale
     and only inside the annotated area (outside it, trees are not labelled)."""
     windows = []
@@ -156,7 +164,7 @@ def _windows(frames, margin, wanted):
                     yield frame, rows, cols
 
 
-def survey_windows(frame, margin):
+def survey_windows(frame: Frame, margin: float) -> tuple[int, ...]:
     """Window sizes for mining a survey frame at its own crown scale: its crown sizes x margin, at most 3."""
     sizes = sorted({max(features.HOG_WINDOW, int(round(dataset.crown_size(b) * margin)))
                     for b in frame.boxes if b.label})
@@ -165,7 +173,8 @@ def survey_windows(frame, margin):
     return tuple(s for s in sizes if s <= min(frame.width, frame.height))
 
 
-def hard_negatives(frames, species, model, rng, survey=False):
+def hard_negatives(frames: Sequence[Frame], species: str, model: TreeModel, rng: np.random.Generator,
+                   survey: bool = False) -> np.ndarray:
     """Windows the current model scores above HARD_NEGATIVE_SCORE that are not trees of the species (survey
     imagery: at the frame's crown scale, inside its annotated area). Vectorised over each score map: a
     survey image holds hundreds of thousands of windows."""
@@ -199,7 +208,7 @@ def hard_negatives(frames, species, model, rng, survey=False):
     return np.array(out, np.float32).reshape(-1, features.hog_descriptor_length())
 
 
-def _area_mask(frame):
+def _area_mask(frame: Frame) -> np.ndarray:
     """Boolean image of the frame's annotated area (all False without labelled boxes)."""
     mask = np.zeros((frame.height, frame.width), np.uint8)
     area = frame.annotated_area()
