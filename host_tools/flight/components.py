@@ -7,7 +7,6 @@ import math
 import os
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
@@ -18,7 +17,7 @@ from crazyflie_app.firmware.supervisor import LANDED, LOCKED, WARNING_LEVEL_OUT
 from crazyflie_app.navigation_core import (PHASE_APPROACH, PHASE_DONE, PHASE_NAMES, PHASE_NO_CAMERA, PHASE_NO_DECK,
                                            rotate)
 from host_tools.errors import ForaNavError
-from host_tools.flight.registry import app_factory
+from host_tools.flight.registry import Camera, app_factory
 from host_tools.flight.telemetry import TlogWriter
 from host_tools.flight.wire import PtyWire
 from host_tools.maps import PlantationMap
@@ -41,7 +40,7 @@ MAV_STATE_STANDBY, MAV_STATE_ACTIVE, MAV_STATE_CRITICAL, MAV_STATE_EMERGENCY = 3
 class FlightRig:
     """The bench: the emulated Crazyflie, the pty wire and the app under test, configured for one map."""
 
-    def __init__(self, pmap: PlantationMap, camera: Any, seed: int, options: dict):
+    def __init__(self, pmap: PlantationMap, camera: Camera, seed: int, options: dict):
         start = options["start"] or pmap.waypoints[0]
         try:
             model = MavModelConfig(**(options["model"] or {})).validate()
@@ -217,7 +216,7 @@ class Delivery:
 class CameraFeed:
     """The lockstep world task: the camera's frames at its frame period, the wire faults, the latency."""
 
-    def __init__(self, camera: Any, rig: FlightRig, hide: HideFault, options: dict, seed: int):
+    def __init__(self, camera: Camera, rig: FlightRig, hide: HideFault, options: dict, seed: int):
         self.camera, self.rig, self.hide, self.options = camera, rig, hide, options
         self.rng = np.random.default_rng([seed, 0x5EED])  # harness faults, independent of camera and model
         self.delivery = Delivery(rig.wire)

@@ -50,7 +50,6 @@ import os
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import Any
 
 from host_tools import fileio
 from host_tools.errors import ForaNavError
@@ -60,7 +59,7 @@ from host_tools.flight.components import (  # noqa: F401  (the harness's public 
     REACHED_MATCH_RADIUS_M, TELEMETRY_PERIOD_MS, TRAJECTORY_PERIOD_MS, WORLD_TASK_PRI, CameraFeed, Delivery,
     FlightRecord, FlightRig, HideFault, Monitor, open_tlog)
 from host_tools.flight.registry import (  # noqa: F401
-    CAMERA_MODULES, DEFAULT_OPTIONS, app_factory, app_names, camera_factory, check_options, register_app,
+    CAMERA_MODULES, DEFAULT_OPTIONS, Camera, app_factory, app_names, camera_factory, check_options, register_app,
     register_camera)
 from host_tools.flight.summary import summarize
 from host_tools.maps import PlantationMap, map_from_dict
@@ -76,7 +75,7 @@ class Flight:
     nothing is left behind once it is closed.
     """
 
-    def __init__(self, pmap: PlantationMap, camera: Any, *, seed: int = 0, out_dir: str | os.PathLike | None = None,
+    def __init__(self, pmap: PlantationMap, camera: Camera, *, seed: int = 0, out_dir: str | os.PathLike | None = None,
                  options: dict | None = None, progress: Progress | None = None):
         self.options = check_options(options)
         self.pmap, self.camera, self.seed, self.progress = pmap, camera, seed, progress
@@ -131,7 +130,7 @@ class Flight:
         fileio.write_json(summary["summary"], {k: v for k, v in summary.items() if k != "cpu_s"})
 
 
-def run_flight(pmap: PlantationMap, camera: Any, *, seed: int = 0, out_dir: str | os.PathLike | None = None,
+def run_flight(pmap: PlantationMap, camera: Camera, *, seed: int = 0, out_dir: str | os.PathLike | None = None,
                options: dict | None = None, progress: Progress | None = None) -> dict:
     """Fly ``pmap`` with the app against ``camera``; return the summary dict (see module docstring).
 

@@ -4,7 +4,7 @@ flight options (``DEFAULT_OPTIONS``, checked by ``check_options``). Re-exported 
 """
 import importlib
 from collections.abc import Callable, Sequence
-from typing import Any
+from typing import Any, Protocol
 
 from crazyflie_app.c_app import CNavigationApp  # the C core's library is loaded (built if stale) on first use
 from crazyflie_app.firmware import Crazyflie
@@ -17,7 +17,19 @@ DEFAULT_OPTIONS = {
     "partial_rate": 0.0, "lockstep": True, "max_time_s": 900.0, "model": None, "params": None, "start": None,
     "mavlink": None, "decks": ("bcFlow2", "bcLoco"), "app": "python",
 }
-CameraFactory = Callable[..., Any]  # (pmap, seed=..., **camera_kwargs) -> a camera (see harness)
+
+
+class Camera(Protocol):
+    """What the harness asks of a camera (see the harness docstring); ``mount_offset`` is optional."""
+
+    frame_period_ms: int
+    latency_ms: int
+
+    def capture(self, t_ms: int, true_pose: tuple[float, float, float, float],
+                hidden: frozenset[int] = frozenset()) -> list[str]: ...
+
+
+CameraFactory = Callable[..., Camera]  # (pmap, seed=..., **camera_kwargs) -> a camera
 AppFactory = Callable[[Crazyflie, Sequence, str | None], Any]  # (cf, waypoints, target_label) -> an app
 _CAMERAS: dict[str, CameraFactory] = {}
 # cameras that live in their own module, imported on first use; the module calls register_camera()
