@@ -14,34 +14,36 @@ It has the interface the harness uses of ``navigation.NavigationApp`` (``start``
 ``core.counters``, ``link.lines_dropped``, ``target_x`` ...). The cf must have UART2 attached
 (``cf.attach_uart2(path)``).
 """
-from crazyflie_app.c_core import CNavigationCore, c_params
-from crazyflie_app.firmware.commander import COMMANDER_PRIORITY_EXTRX, setpoint_t
-from crazyflie_app.firmware.freertos import PORT_MAX_DELAY, m2t, v_task_delay
-from crazyflie_app.firmware.logparam import LOG_VARID_INVALID, PARAM_VARID_INVALID
-from crazyflie_app.navigation import (APP_PERIOD_MS, APP_TASK_PRI, BOOT_DELAY_MS, CAMERA_TASK_PERIOD_MS,
-                                      CAMERA_TASK_PRI, CAMERA_WAIT_POLL_MS, DEBUG_MODULE, LOG_TABLE, PARAM_TABLE, PRE_TAKEOFF_DELAY_MS,
-                                      set_hover_setpoint, set_null_setpoint)
+from collections.abc import Iterator, Sequence
+
+from crazyflie_app.app_main import CAMERA_TASK_PERIOD_MS, DEBUG_MODULE, app_init
+from crazyflie_app.c_core import CFrame, CNavigationCore, CParams, c_params
+from crazyflie_app.firmware.commander import setpoint_t
+from crazyflie_app.firmware.freertos import Delay, m2t, v_task_delay
+from crazyflie_app.firmware.system import Crazyflie
+from crazyflie_app.navigation import LOG_TABLE, PARAM_TABLE
 
 UART2_BAUDRATE = 115200
 UART_READ_CHUNK = 64  # foranav_app.c: uint8_t buffer[64]
 UART_READ_TIMEOUT_TICKS = 1
 
 
-class _UartLinkStatus(object):
+class _UartLinkStatus:
     """What the harness reads of the app's link: lines dropped for length (C assembler), port opens."""
 
-    def __init__(self, app):
+    def __init__(self, app: "CNavigationApp"):
         self._app = app
 
     lines_dropped = property(lambda self: self._app.core.lines_dropped)
     opens = property(lambda self: self._app.cf.uart2.opens)
 
-    def close(self):
+    def close(self) -> None:
         self._app.cf.uart2.close()
 
 
-class CNavigationApp(object):
-    def __init__(self, cf, flight_path, serial_url=None, params=None, link=None, target_label=None):
+class CNavigationApp:
+    def __init__(self, cf: Crazyflie, flight_path: Sequence[tuple[float, float]], serial_url: str | None = None,
+                 params: CParams | None = None, link: object = None, target_label: str | None = None):
         if cf.uart2 is None:
             raise ValueError("CNavigationApp reads UART2: cf.attach_uart2(path) first")
         self.cf = cf
@@ -50,74 +52,28 @@ class CNavigationApp(object):
         self.params = self.core.params  # the C struct: PARAM writes reach the core at once
         self.link = _UartLinkStatus(self)
         self.setpoint = setpoint_t()
-        self._estimate_ids = None
+        self.estimate_ids = None
         self.last_detection_ms = -1
         cf.registry.register_param_group(PARAM_TABLE, self.params)
         cf.registry.register_log_group(LOG_TABLE, self)
 
-    def start(self):
-        self.cf.x_task_create(self.app_main(), "APP", APP_TASK_PRI)
-        self.cf.x_task_create(self.camera_task(), "CAMERA", CAMERA_TASK_PRI)
+    def start(self) -> None:
+        """appInit() of foranav_app.c: its appMain (``app_main.app_main``, as the Python app's) and camera task."""
+        app_init(self)
 
-    # -- appMain ----------------------------------------------------------------------------------------------
+    # -- what appMain asks of the app -------------------------------------------------------------------------
 
-    def app_main(self):
+    def camera_alive(self, now: int) -> bool:
+        return self.core.camera_alive(now)
+
+    def format_fixed(self, value: float, decimals: int) -> str:
+        return self.core.format_fixed(value, decimals)
+
+    def read_pose(self) -> tuple[float, ...]:
         cf = self.cf
-        cf.debug_print(DEBUG_MODULE, "ForaNav app started, waiting for the system")
-        yield v_task_delay(m2t(BOOT_DELAY_MS))
-        flow_id = cf.param_get_var_id("deck", "bcFlow2")
-        loco_id = cf.param_get_var_id("deck", "bcLoco")
-        if flow_id.id == PARAM_VARID_INVALID or not cf.param_get_uint(flow_id):
-            cf.debug_print(DEBUG_MODULE, "No flow deck installed, aborting")
-            self.core.abort_no_deck(cf.x_task_get_tick_count())
-            self._print_events()
-            yield v_task_delay(PORT_MAX_DELAY)
-            return
-        if loco_id.id == PARAM_VARID_INVALID or not cf.param_get_uint(loco_id):
-            cf.debug_print(DEBUG_MODULE, "No Loco deck: flying on Flow dead reckoning, expect drift")
-        ids = [cf.log_get_var_id("stateEstimate", name) for name in ("x", "y", "z", "yaw", "vx", "vy")]
-        if LOG_VARID_INVALID in ids:
-            cf.debug_print(DEBUG_MODULE, "stateEstimate not available, aborting")
-            yield v_task_delay(PORT_MAX_DELAY)
-            return
-        self._estimate_ids = ids
-        yield v_task_delay(m2t(PRE_TAKEOFF_DELAY_MS))
-        waited_ms = 0
-        while not self.core.camera_alive(cf.x_task_get_tick_count()):
-            if waited_ms >= self.params.camera_wait_ms:
-                cf.debug_print(DEBUG_MODULE, "No camera heard for %s s, not taking off"
-                               % self.core.format_fixed(self.params.camera_wait_ms / 1000.0, 1))
-                self.core.abort_no_camera(cf.x_task_get_tick_count())
-                self._print_events()
-                yield v_task_delay(PORT_MAX_DELAY)
-                return
-            if waited_ms == 0:
-                cf.debug_print(DEBUG_MODULE, "Waiting for the camera")
-            yield v_task_delay(m2t(CAMERA_WAIT_POLL_MS))
-            waited_ms += CAMERA_WAIT_POLL_MS
-        if not cf.supervisor_request_arming(True):
-            cf.debug_print(DEBUG_MODULE, "Arming refused by the supervisor, aborting")
-            yield v_task_delay(PORT_MAX_DELAY)
-            return
-        cf.debug_print(DEBUG_MODULE, "Armed")
-        self.core.start(cf.x_task_get_tick_count())
-        self._print_events()
-        while True:
-            now = cf.x_task_get_tick_count()
-            command = self.core.step(now, self.read_pose())
-            if command.kind == "hover":
-                set_hover_setpoint(self.setpoint, command.vx, command.vy, command.z, 0.0)
-            else:
-                set_null_setpoint(self.setpoint)
-            cf.commander_set_setpoint(self.setpoint, COMMANDER_PRIORITY_EXTRX)
-            self._print_events()
-            yield v_task_delay(m2t(APP_PERIOD_MS))
+        return tuple(cf.log_get_float(var_id) for var_id in self.estimate_ids)
 
-    def read_pose(self):
-        cf = self.cf
-        return tuple(cf.log_get_float(var_id) for var_id in self._estimate_ids)
-
-    def _print_events(self):
+    def print_events(self) -> None:
         for event in self.core.events:
             self.cf.debug_print(DEBUG_MODULE, event.text)
             self.cf.event_trigger(event.kind, tree_id=event.tree_id, x=event.x, y=event.y)
@@ -125,12 +81,12 @@ class CNavigationApp(object):
 
     # -- the camera task --------------------------------------------------------------------------------------
 
-    def camera_task(self):
+    def camera_task(self) -> Iterator[Delay]:
         cf = self.cf
         cf.uart2_init(UART2_BAUDRATE)
         while True:
             now = cf.x_task_get_tick_count()
-            valid = self._estimate_ids is not None
+            valid = self.estimate_ids is not None
             pose = self.read_pose() if valid else None
             while True:
                 data = cf.uart2_get_data_with_timeout(UART_READ_CHUNK, UART_READ_TIMEOUT_TICKS)
@@ -138,15 +94,15 @@ class CNavigationApp(object):
                     break
                 self._frames_done(self.core.feed(data, now, pose, valid), now, pose)
             self._frames_done(self.core.end_batch(now, pose, valid), now, pose)
-            self._print_events()
+            self.print_events()
             yield v_task_delay(m2t(CAMERA_TASK_PERIOD_MS))
 
-    def _frames_done(self, frames, now, pose):
+    def _frames_done(self, frames: list[CFrame], now: int, pose: tuple[float, ...] | None) -> None:
         for detections, ids, points in frames:
             self.last_detection_ms = now
             for (u, v), tree_id, (wx, wy) in zip(detections, ids, points):
                 self.cf.event_trigger("detection", u=u, v=v, tree_id=tree_id, z=pose[2], x=wx, y=wy)
-            self._print_events()
+            self.print_events()
 
     # -- LOG variables ----------------------------------------------------------------------------------------
 
@@ -175,11 +131,5 @@ class CNavigationApp(object):
     link_losses = property(lambda self: self.core.status().link_losses)
     frames = property(lambda self: self.core.frames)
     other_labels = property(lambda self: self.core.other_labels)
-
-    @property
-    def target_x(self):
-        return self.core.target_xy[0]
-
-    @property
-    def target_y(self):
-        return self.core.target_xy[1]
+    target_x = property(lambda self: self.core.target_xy[0])
+    target_y = property(lambda self: self.core.target_xy[1])

@@ -16,10 +16,11 @@ import math
 import os
 import subprocess
 import tempfile
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from crazyflie_app.navigation_core import Command, Counters, Event
+from crazyflie_app.navigation_core import Command, Counters, Detection, Event, NavigationParams
 
 REPO = Path(__file__).resolve().parents[1]
 SOURCE_DIR = Path(__file__).resolve().parent / "bolt" / "src"
@@ -34,6 +35,8 @@ EVENT_KINDS = ("phase", "tree_added", "tree_evicted", "target_selected", "tree_r
 LINE_KINDS = (None, "T2", "N2", "MARK START", "MARK STOP")
 TEXT_SIZE = 160
 MAX_ROWS = 256
+# a frame the C camera input handed to the core: (detections [(u, v)], tree ids, ground points [(x, y)])
+CFrame = tuple[list[tuple[float, float]], list[int], list[tuple[float, float]]]
 
 _D, _I = ctypes.c_double, ctypes.c_int32
 # NavParams of nav_core.h, in its order; the names are NavigationParams' fields (a test checks they agree)
@@ -59,7 +62,7 @@ class CParams(ctypes.Structure):
     _fields_ = _PARAM_FIELDS
 
     @property
-    def focal_px(self):
+    def focal_px(self) -> float:
         return (1.0 / self.cam_scale) * self.cam_width_px / 352.0
 
 
@@ -74,7 +77,7 @@ class _Status(ctypes.Structure):
                 + [(name, _D) for name in ("err_u", "err_v", "target_x", "target_y")])
 
 
-def build_library(output=LIBRARY, extra_flags=(), compiler="gcc"):
+def build_library(output: str | os.PathLike = LIBRARY, extra_flags: Sequence[str] = (), compiler: str = "gcc") -> Path:
     """Compile the core into a shared library (temp file + rename: a concurrent loader never sees half)."""
     output = Path(output)
     output.parent.mkdir(parents=True, exist_ok=True)
@@ -90,7 +93,7 @@ def build_library(output=LIBRARY, extra_flags=(), compiler="gcc"):
     return output
 
 
-def _stale(library):
+def _stale(library: Path) -> bool:
     if not library.exists():
         return True
     built = library.stat().st_mtime
@@ -100,7 +103,7 @@ def _stale(library):
 _LIB = None
 
 
-def load_library():
+def load_library() -> ctypes.CDLL:
     """The loaded library (built first when missing or stale, unless FORANAV_CAPP_LIB names one)."""
     global _LIB
     if _LIB is not None:
@@ -151,7 +154,7 @@ def load_library():
     return lib
 
 
-def c_params(params=None):
+def c_params(params: NavigationParams | None = None) -> CParams:
     """A CParams filled from a NavigationParams (default: the C defaults, which equal NavigationParams())."""
     out = CParams()
     if params is None:
@@ -162,7 +165,7 @@ def c_params(params=None):
     return out
 
 
-def parse_line(line):
+def parse_line(line: bytes) -> tuple[str | None, str, float, float, float, float]:
     """The C parser on one line (bytes): (kind, label, x, y, w, h); kind None for a non-message."""
     lib = load_library()
     label = ctypes.create_string_buffer(80)
@@ -190,31 +193,31 @@ class CVisited:
     revisit: bool = False
 
 
-class _MemoryView(object):
+class _MemoryView:
     """tree_memory.TreeMemory's read side: trees (dict by id, insertion order), visited, counters."""
 
-    def __init__(self, core):
+    def __init__(self, core: "CNavigationCore"):
         self._core = core
 
-    def _rows(self, fn, width):
+    def _rows(self, fn: Callable, width: int) -> list[tuple]:
         out = (_D * (width * MAX_ROWS))()
         n = fn(self._core.handle, out, MAX_ROWS)
         return [tuple(out[width * i:width * i + width]) for i in range(n)]
 
     @property
-    def trees(self):
+    def trees(self) -> dict[int, CTree]:
         return {int(r[0]): CTree(int(r[0]), r[1], r[2], int(r[3]), int(r[4]))
                 for r in self._rows(self._core.lib.navHostTrees, 5)}
 
     @property
-    def visited(self):
+    def visited(self) -> list[CVisited]:
         return [CVisited(int(r[0]), r[1], r[2], int(r[3]), bool(r[4]), bool(r[5]))
                 for r in self._rows(self._core.lib.navHostVisited, 6)]
 
-    def get(self, tree_id):
+    def get(self, tree_id: int) -> CTree | None:
         return self.trees.get(tree_id)
 
-    def __len__(self):
+    def __len__(self) -> int:
         return self._core.status().num_trees
 
     evicted = property(lambda self: self._core.status().evicted)
@@ -222,10 +225,11 @@ class _MemoryView(object):
     visited_forgotten = property(lambda self: self._core.status().forgotten)
 
 
-class CNavigationCore(object):
+class CNavigationCore:
     """The C core behind NavigationCore's interface. Events are moved into ``events`` after every call."""
 
-    def __init__(self, params, flight_path, target_label=None):
+    def __init__(self, params: NavigationParams | CParams | None, flight_path: Sequence[tuple[float, float]],
+                 target_label: str | None = None):
         if len(flight_path) < 2:
             raise ValueError("the flight path needs at least 2 waypoints")
         self.lib = load_library()
@@ -246,12 +250,12 @@ class CNavigationCore(object):
         self._status = _Status()
         self._max_frame = self.lib.navHostMaxFrameDetections()
 
-    def close(self):
+    def close(self) -> None:
         if self.handle:
             self.lib.navHostDestroy(self.handle)
             self.handle = None
 
-    def __del__(self):
+    def __del__(self) -> None:
         try:
             self.close()
         except Exception:  # interpreter shutdown: the library may be gone already
@@ -259,44 +263,44 @@ class CNavigationCore(object):
 
     # -- calls ------------------------------------------------------------------------------------------------
 
-    def _set_pose(self, pose):
+    def _set_pose(self, pose: Sequence[float]) -> ctypes.Array:
         p = self._pose
         p[0], p[1], p[2], p[3], p[4], p[5] = pose
         return p
 
-    def start(self, t_ms):
+    def start(self, t_ms: int) -> None:
         self.lib.navHostStart(self.handle, int(t_ms))
         self._drain()
 
-    def abort_no_deck(self, t_ms):
+    def abort_no_deck(self, t_ms: int) -> None:
         self.lib.navHostAbortNoDeck(self.handle, int(t_ms))
         self._drain()
 
-    def abort_no_camera(self, t_ms):
+    def abort_no_camera(self, t_ms: int) -> None:
         self.lib.navHostAbortNoCamera(self.handle, int(t_ms))
         self._drain()
 
-    def format_fixed(self, value, decimals):
+    def format_fixed(self, value: float, decimals: int) -> str:
         """The C console's number format ("%.*f", as the Bolt build prints it)."""
         out = ctypes.create_string_buffer(48)
         self.lib.navHostFormatFixed(out, len(out), float(value), int(decimals))
         return out.value.decode("ascii")
 
-    def camera_alive(self, t_ms):
+    def camera_alive(self, t_ms: int) -> bool:
         """The adapters' pre-flight check: a camera message within app.linkHoldMs (camWaitMs 0: none)."""
         return bool(self.lib.navHostCameraAlive(self.handle, int(t_ms)))
 
-    def step(self, t_ms, pose):
+    def step(self, t_ms: int, pose: Sequence[float]) -> Command:
         kind = self.lib.navHostStep(self.handle, int(t_ms), self._set_pose(pose), self._out)
         self._drain()
         if kind == 0:
             return Command("null", 0.0, 0.0, 0.0)
         return Command("hover", self._out[0], self._out[1], self._out[2])
 
-    def on_frame_mark(self, t_ms):
+    def on_frame_mark(self, t_ms: int) -> None:
         self.lib.navHostOnFrameMark(self.handle, int(t_ms))
 
-    def on_frame(self, t_ms, detections, pose_now):
+    def on_frame(self, t_ms: int, detections: Sequence[Detection], pose_now: Sequence[float]) -> list[int]:
         n = min(len(detections), self._max_frame)
         uv = (_D * (2 * max(n, 1)))(*[c for d in detections[:n] for c in (d.u, d.v)])
         ids, points = (_I * max(n, 1))(), (_D * (2 * max(n, 1)))()
@@ -305,7 +309,7 @@ class CNavigationCore(object):
         self._drain()
         return [ids[i] for i in range(taken)]
 
-    def feed(self, data, t_ms, pose_now, pose_valid):
+    def feed(self, data: bytes, t_ms: int, pose_now: Sequence[float] | None, pose_valid: bool) -> list[CFrame]:
         """UART bytes into the camera input; returns [(detections [(u, v)], ids, points)] of the frames it
         handed to the core."""
         frames = []
@@ -321,13 +325,13 @@ class CNavigationCore(object):
         self._drain()
         return frames
 
-    def end_batch(self, t_ms, pose_now, pose_valid):
+    def end_batch(self, t_ms: int, pose_now: Sequence[float] | None, pose_valid: bool) -> list[CFrame]:
         pose = self._set_pose(pose_now if pose_now is not None else (0.0,) * 6)
         handed = self.lib.navHostEndBatch(self.handle, int(t_ms), pose, int(bool(pose_valid)))
         self._drain()
         return [self.last_frame()] if handed else []
 
-    def last_frame(self):
+    def last_frame(self) -> CFrame:
         m = self._max_frame
         uv, ids, points = (_D * (2 * m))(), (_I * m)(), (_D * (2 * m))()
         n = self.lib.navHostLastFrame(self.handle, uv, ids, points)
@@ -335,7 +339,7 @@ class CNavigationCore(object):
         return ([(uv[2 * i], uv[2 * i + 1]) for i in range(n)], [ids[i] for i in range(n)],
                 list(self.last_frame_points))
 
-    def _drain(self):
+    def _drain(self) -> None:
         text, detail = ctypes.create_string_buffer(TEXT_SIZE), ctypes.create_string_buffer(64)
         kind, tree_id, t_ms, xy = _I(), _I(), _I(), (_D * 2)()
         while self.lib.navHostNextEvent(self.handle, text, TEXT_SIZE, ctypes.byref(kind), ctypes.byref(tree_id), xy,
@@ -347,7 +351,7 @@ class CNavigationCore(object):
 
     # -- state --------------------------------------------------------------------------------------------------
 
-    def status(self):
+    def status(self) -> _Status:
         self.lib.navHostStatus(self.handle, ctypes.byref(self._status))
         return self._status
 
@@ -365,17 +369,17 @@ class CNavigationCore(object):
     revisiting = property(lambda self: bool(self.status().revisiting))
 
     @property
-    def pixel_error(self):
+    def pixel_error(self) -> tuple[float, float]:
         s = self.status()
         return (s.err_u, s.err_v)
 
     @property
-    def target_xy(self):
+    def target_xy(self) -> tuple[float, float]:
         s = self.status()
         return (s.target_x, s.target_y) if s.has_target else (math.nan, math.nan)
 
     @property
-    def counters(self):
+    def counters(self) -> Counters:
         s = self.status()
         return Counters(s.detections, s.out_of_column, s.on_visited, s.reached, s.recoveries, s.abandoned,
                         s.link_losses, s.duplicates)

@@ -7,20 +7,26 @@ are merged when they are one crown seen twice, associated with T_d or the visite
 * After each frame the core drops a stored tree within ``dupRadius`` of a reached tree as that tree seen
   again (event ``tree_absorbed``; tree_memory).
 """
-from crazyflie_app.camera_geometry import merge_duplicates
-from crazyflie_app.nav_types import Event
+from collections.abc import Callable, Sequence
+
+from crazyflie_app.camera_geometry import Point, merge_duplicates
+from crazyflie_app.nav_types import Counters, Detection, Event, NavigationParams
+from crazyflie_app.path_following import PathFollower
+from crazyflie_app.tree_memory import TreeMemory
 
 
 class FrameInput:
     """Feeds T_d (``memory``) from frames; the target's own detections go back to the caller."""
 
-    def __init__(self, params, route, memory, counters):
+    def __init__(self, params: NavigationParams, route: PathFollower, memory: TreeMemory, counters: Counters):
         self.params = params
         self.route = route  # the PathFollower: its current segment's planting column admits new trees
         self.memory = memory
         self.counters = counters
 
-    def take(self, t_ms, detections, points, mav_xy, events, target_id, evicted, measure):
+    def take(self, t_ms: int, detections: Sequence[Detection], points: Sequence[Point], mav_xy: Point,
+             events: list[Event], target_id: Callable[[], int], evicted: Callable[[int, list, str], None],
+             measure: Callable[[int, Detection], None]) -> list[int]:
         """Handle one frame: ``points`` the ground positions of ``detections``. ``target_id()`` is the
         current target, ``evicted(t_ms, ids, why)`` is told of trees pushed out of T_d and ``measure(t_ms,
         det)`` of each detection of the target, as they happen. Returns, per detection, the id of its tree

@@ -5,7 +5,7 @@ hold position (zero velocity at the flight height) until frames come back, when 
 was; silent for ``linkLandMs`` it lands (LAND, then DONE with ``link_aborted``). A camera that sends no frame
 marks cannot be told from one that sees nothing, so it is not watched.
 """
-from crazyflie_app.nav_types import Event
+from crazyflie_app.nav_types import Counters, Event, NavigationParams
 
 HOLD, LAND = "hold", "land"
 
@@ -13,16 +13,16 @@ HOLD, LAND = "hold", "land"
 class LinkWatch:
     """Time of the last end-of-frame mark and the lost / aborted flags."""
 
-    def __init__(self, params):
+    def __init__(self, params: NavigationParams):
         self.params = params
         self.last_frame_ms = None  # None: not watched (no frame mark yet)
         self.link_lost = False
         self.link_aborted = False
 
-    def on_frame_mark(self, t_ms):
+    def on_frame_mark(self, t_ms: int) -> None:
         self.last_frame_ms = t_ms
 
-    def check(self, t_ms, flying, events, counters):
+    def check(self, t_ms: int, flying: bool, events: list[Event], counters: Counters) -> str | None:
         """HOLD while the link is silent in flight, LAND when it stays silent, else None; the decisions go
         to ``events`` (and ``counters.link_losses``)."""
         if self.last_frame_ms is None or not flying:

@@ -1,8 +1,8 @@
 """The navigation core's records: the phases, the pose / command / detection tuples, every parameter
 (``NavigationParams``, exported by the app as PARAMs), the decisions (``Event``) and the counters. Imported
 through ``crazyflie_app.navigation_core`` by everything outside the core."""
-from collections import namedtuple
 from dataclasses import dataclass
+from typing import NamedTuple
 
 from crazyflie_app.path_following import COLUMN_FACTOR
 
@@ -13,10 +13,29 @@ PHASE_NAMES = ("BOOT", "TAKEOFF", "FOLLOW_PATH", "APPROACH", "RECOVERY", "RETURN
 
 POSE_HISTORY_LENGTH = 128  # ticks of pose history kept for latency compensation (~1.3 s at 100 Hz)
 
-Pose = namedtuple("Pose", "x y z yaw_deg vx vy")  # the estimate: m, m, m, deg, m/s, m/s
-Command = namedtuple("Command", "kind vx vy z")  # kind "hover" (body vx, vy in m/s; z abs in m) or "null"
-Detection = namedtuple("Detection", "u v")  # image position, px
 
+class Pose(NamedTuple):
+    """The state estimate (a tuple, as the C core takes it)."""
+    x: float  # m
+    y: float  # m
+    z: float  # m
+    yaw_deg: float
+    vx: float  # m/s
+    vy: float  # m/s
+
+
+class Command(NamedTuple):
+    """What the core asks for: kind "hover" (body vx, vy in m/s; z absolute in m) or "null" (motors off)."""
+    kind: str
+    vx: float
+    vy: float
+    z: float
+
+
+class Detection(NamedTuple):
+    """A detection's image position, px."""
+    u: float
+    v: float
 
 
 @dataclass
@@ -79,7 +98,7 @@ class NavigationParams:
     frame_capacity: int = 64  # detections kept per frame; more before MARK STOP are dropped (counted)
 
     @property
-    def focal_px(self):
+    def focal_px(self) -> float:
         return (1.0 / self.cam_scale) * self.cam_width_px / 352.0
 
 

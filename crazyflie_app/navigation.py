@@ -1,14 +1,14 @@
 """The ForaNav Bolt navigation app (a port of ``Navigation/Navigation.c``) on the emulated firmware.
 
 The algorithm lives in the pure core (``navigation_core.NavigationCore``, with ``pixel_kalman`` and
-``tree_memory``); this module is the thin firmware layer around it, shaped like the C app: ``app_main`` waits
+``tree_memory``); this module is the thin firmware layer around it, shaped like the C app: ``app_main.app_main`` waits
 for the system, checks the decks, then loops every 10 ms reading ``stateEstimate.*``, stepping the core and
 sending its setpoint at ``COMMANDER_PRIORITY_EXTRX``; ``camera_task`` reads the JeVois lines from the serial
 link and hands each frame's detections to the core. PARAM and LOG tables are declared at the bottom.
 
 C -> Python names (Navigation.c -> here)::
 
-    appMain()                          NavigationApp.app_main()  (a task generator)
+    appMain()                          app_main.app_main(app)  (a task generator, shared with the C app)
     setHoverSetpoint(sp, vx, vy, z, yaw)
                                        set_hover_setpoint(sp, vx, vy, z, yaw)  (body velocity, abs z and yaw)
     memset(&setpoint, 0, ...)          set_null_setpoint(sp)  (motors off)
@@ -51,46 +51,23 @@ use the estimate at *capture* time (``camLatency``); serial text lines (JeVois s
 replace the CPX bytes, so the 255-column byte limit of the C protocol is gone.
 """
 import math
+from collections.abc import Iterator, Sequence
 
 from jevois_module.ForaNavTrees import foranav_serial
-from crazyflie_app.firmware.commander import (COMMANDER_PRIORITY_EXTRX, modeAbs, modeVelocity, setpoint_t)
-from crazyflie_app.firmware.freertos import m2t, v_task_delay, PORT_MAX_DELAY
-from crazyflie_app.firmware.logparam import (LOG_FLOAT, LOG_UINT8, LOG_UINT16, LOG_UINT32, LOG_VARID_INVALID,
-                                              PARAM_FLOAT, PARAM_UINT8, PARAM_UINT16, PARAM_UINT32,
-                                              PARAM_VARID_INVALID, log_add, log_group, param_add, param_group)
+from crazyflie_app.app_main import CAMERA_TASK_PERIOD_MS, DEBUG_MODULE, app_init, format_fixed
+from crazyflie_app.app_main import BOOT_DELAY_MS, PRE_TAKEOFF_DELAY_MS  # noqa: F401 (the app's boot timing)
+from crazyflie_app.firmware.commander import setpoint_t
+from crazyflie_app.firmware.freertos import Delay, m2t, v_task_delay
+from crazyflie_app.firmware.logparam import (LOG_FLOAT, LOG_UINT8, LOG_UINT16, LOG_UINT32, PARAM_FLOAT, PARAM_UINT8,
+                                              PARAM_UINT16, PARAM_UINT32, log_add, log_group, param_add, param_group)
+from crazyflie_app.firmware.system import Crazyflie
 from crazyflie_app.navigation_core import (PHASE_DONE, PHASE_NO_CAMERA, Detection, NavigationCore,
                                            NavigationParams, Pose)
 from crazyflie_app.serial_link import SerialLink
-
-DEBUG_MODULE = "FORANAV"
-APP_TASK_PRI = 1  # CONFIG_APP_PRIORITY of the NAV-family builds
-CAMERA_TASK_PRI = 1
-APP_PERIOD_MS = 10  # the C main loop: vTaskDelay(M2T(10))
-CAMERA_TASK_PERIOD_MS = 10  # serial polling period; reading never blocks
-BOOT_DELAY_MS = 2000  # Navigation.c: wait 2 s, then check the decks
-PRE_TAKEOFF_DELAY_MS = 3000  # Navigation.c: wait 3 s more before take-off
-CAMERA_WAIT_POLL_MS = 10  # pre-flight camera check: how often app_main looks whether the camera was heard
+from crazyflie_app.uart2_link import Uart2Link
 
 
-def set_hover_setpoint(sp, vx, vy, z, yaw):
-    """Body-frame velocity vx, vy (m/s), absolute height z (m) and absolute yaw (deg), as Navigation.c."""
-    sp.mode.x = modeVelocity
-    sp.mode.y = modeVelocity
-    sp.mode.z = modeAbs
-    sp.mode.yaw = modeAbs
-    sp.velocity.x = vx
-    sp.velocity.y = vy
-    sp.position.z = z
-    sp.attitude.yaw = yaw
-    sp.velocity_body = True
-
-
-def set_null_setpoint(sp):
-    """memset(&setpoint, 0, sizeof(setpoint)): every axis disabled, thrust 0 -> motors off."""
-    sp.memset_zero()
-
-
-class NavigationApp(object):
+class NavigationApp:
     """One instance of the app on one emulated Crazyflie.
 
     ``flight_path`` is the path F (waypoints [(x, y), ...], metres; compiled-in constants in the C app);
@@ -98,7 +75,9 @@ class NavigationApp(object):
     of ``N2`` lines to act on (``T2`` lines carry no label and are always taken).
     """
 
-    def __init__(self, cf, flight_path, serial_url, params=None, link=None, target_label=None):
+    def __init__(self, cf: Crazyflie, flight_path: Sequence[tuple[float, float]], serial_url: str | None,
+                 params: NavigationParams | None = None, link: SerialLink | Uart2Link | None = None,
+                 target_label: str | None = None):
         self.cf = cf
         self.target_label = target_label  # N2 lines with another label are ignored (None: accept all)
         self.other_labels = 0
@@ -112,81 +91,28 @@ class NavigationApp(object):
         self.last_detection_ms = -1
         self.last_heard_ms = -1  # last valid camera message (frame mark or detection); -1: never heard
         self.frame_overflow = 0  # detections dropped: more than app.frameCap in one frame
+        self.estimate_ids = None  # the stateEstimate log ids, resolved by app_main
         cf.registry.register_param_group(PARAM_TABLE, self.params)
         cf.registry.register_log_group(LOG_TABLE, self)
 
-    def start(self):
-        """appInit(): create the app task and the camera-input task."""
-        self.cf.x_task_create(self.app_main(), "APP", APP_TASK_PRI)
-        self.cf.x_task_create(self.camera_task(), "CAMERA", CAMERA_TASK_PRI)
+    def start(self) -> None:
+        """appInit(): the app task (``app_main.app_main``: checks, arming, the 10 ms loop) and the camera task."""
+        app_init(self)
 
-    # -- the app task -------------------------------------------------------------------------------------
+    # -- what the app task asks of the app ----------------------------------------------------------------
 
-    def app_main(self):
-        cf = self.cf
-        cf.debug_print(DEBUG_MODULE, "ForaNav app started, waiting for the system")
-        yield v_task_delay(m2t(BOOT_DELAY_MS))
-        flow_id = cf.param_get_var_id("deck", "bcFlow2")
-        loco_id = cf.param_get_var_id("deck", "bcLoco")
-        if flow_id.id == PARAM_VARID_INVALID or not cf.param_get_uint(flow_id):
-            cf.debug_print(DEBUG_MODULE, "No flow deck installed, aborting")
-            self.core.abort_no_deck(cf.x_task_get_tick_count())
-            yield v_task_delay(PORT_MAX_DELAY)  # appMain returned: the task parks
-            return
-        if loco_id.id == PARAM_VARID_INVALID or not cf.param_get_uint(loco_id):
-            cf.debug_print(DEBUG_MODULE, "No Loco deck: flying on Flow dead reckoning, expect drift")
-        ids = [cf.log_get_var_id("stateEstimate", name) for name in ("x", "y", "z", "yaw", "vx", "vy")]
-        if LOG_VARID_INVALID in ids:
-            cf.debug_print(DEBUG_MODULE, "stateEstimate not available, aborting")
-            yield v_task_delay(PORT_MAX_DELAY)
-            return
-        self._estimate_ids = ids
-        yield v_task_delay(m2t(PRE_TAKEOFF_DELAY_MS))
-        waited_ms = 0
-        while not self.camera_alive(cf.x_task_get_tick_count()):
-            if waited_ms >= self.params.camera_wait_ms:
-                # a camera never heard is a camera lost: flying the path blind would "complete" nothing
-                cf.debug_print(DEBUG_MODULE, "No camera heard for %.1f s, not taking off"
-                               % (self.params.camera_wait_ms / 1000.0))
-                self.core.abort_no_camera(cf.x_task_get_tick_count())
-                self._print_events()
-                yield v_task_delay(PORT_MAX_DELAY)
-                return
-            if waited_ms == 0:
-                cf.debug_print(DEBUG_MODULE, "Waiting for the camera")
-            yield v_task_delay(m2t(CAMERA_WAIT_POLL_MS))
-            waited_ms += CAMERA_WAIT_POLL_MS
-        # the last check passed. The Bolt requires arming (CONFIG_MOTORS_REQUIRE_ARMING): until armed the
-        # supervisor replaces every setpoint by the null one
-        if not cf.supervisor_request_arming(True):
-            cf.debug_print(DEBUG_MODULE, "Arming refused by the supervisor, aborting")
-            yield v_task_delay(PORT_MAX_DELAY)
-            return
-        cf.debug_print(DEBUG_MODULE, "Armed")
-        self.core.start(cf.x_task_get_tick_count())
-        self._print_events()
-        while True:
-            now = cf.x_task_get_tick_count()
-            command = self.core.step(now, self.read_pose())
-            if command.kind == "hover":
-                set_hover_setpoint(self.setpoint, command.vx, command.vy, command.z, 0.0)
-            else:
-                set_null_setpoint(self.setpoint)
-            cf.commander_set_setpoint(self.setpoint, COMMANDER_PRIORITY_EXTRX)
-            self._print_events()
-            yield v_task_delay(m2t(APP_PERIOD_MS))
-
-    def camera_alive(self, now):
+    def camera_alive(self, now: int) -> bool:
         """Pre-flight check: a valid camera message within app.linkHoldMs (app.camWaitMs 0: no check)."""
         if self.params.camera_wait_ms <= 0:
             return True
         return self.last_heard_ms >= 0 and now - self.last_heard_ms <= self.params.link_hold_ms
 
-    def read_pose(self):
-        cf, ids = self.cf, self._estimate_ids
-        return Pose(*[cf.log_get_float(var_id) for var_id in ids])
+    def read_pose(self) -> Pose:
+        return Pose(*[self.cf.log_get_float(var_id) for var_id in self.estimate_ids])
 
-    def _print_events(self):
+    format_fixed = staticmethod(format_fixed)  # the console's number format
+
+    def print_events(self) -> None:
         for event in self.core.events:
             if event.kind == "phase":
                 text = "phase " + event.detail
@@ -203,7 +129,7 @@ class NavigationApp(object):
 
     # -- the camera-input task ----------------------------------------------------------------------------
 
-    def camera_task(self):
+    def camera_task(self) -> Iterator[Delay]:
         while True:
             for line in self.link.poll(self.cf.x_task_get_tick_count()):
                 self.on_camera_line(line)
@@ -212,7 +138,7 @@ class NavigationApp(object):
                 self._end_frame()  # a camera without frame marks: each batch of lines is one frame
             yield v_task_delay(m2t(CAMERA_TASK_PERIOD_MS))
 
-    def on_camera_line(self, line):
+    def on_camera_line(self, line: bytes) -> None:
         """One received line: T2/N2 detections are kept for the frame, MARK START/STOP delimit frames, and
         everything else (OK, ERR ..., ALIVE, noise) is ignored."""
         message = foranav_serial.parse_line(line)
@@ -233,7 +159,7 @@ class NavigationApp(object):
             self._frame.append(Detection(foranav_serial.std_to_img_x(message.x, p.cam_width_px),
                                          foranav_serial.std_to_img_y(message.y, p.cam_height_px)))
 
-    def _bound_frame(self):
+    def _bound_frame(self) -> bool:
         """Keep the frame being received within app.frameCap (a PARAM that may be lowered in flight); True
         if there is room for one more detection."""
         cap = max(0, int(self.params.frame_capacity))
@@ -242,9 +168,9 @@ class NavigationApp(object):
             del self._frame[cap:]
         return len(self._frame) < cap
 
-    def _end_frame(self):
+    def _end_frame(self) -> None:
         if not self._frame or self.core.phase in (PHASE_DONE, PHASE_NO_CAMERA) \
-                or not hasattr(self, "_estimate_ids"):
+                or self.estimate_ids is None:
             self._frame = []
             return
         now = self.cf.x_task_get_tick_count()
@@ -255,7 +181,7 @@ class NavigationApp(object):
         self.last_detection_ms = now
         for det, tree_id, (wx, wy) in zip(detections, ids, self.core.last_frame_points):
             self.cf.event_trigger("detection", u=det.u, v=det.v, tree_id=tree_id, z=pose.z, x=wx, y=wy)
-        self._print_events()
+        self.print_events()
 
     # -- LOG variables ------------------------------------------------------------------------------------
 
@@ -281,16 +207,12 @@ class NavigationApp(object):
     link_opens = property(lambda self: self.link.opens)
     link_lost = property(lambda self: int(self.core.link_lost))
     link_losses = property(lambda self: self.core.counters.link_losses)
+    target_x = property(lambda self: self._target_coordinate("x"))
+    target_y = property(lambda self: self._target_coordinate("y"))
 
-    @property
-    def target_x(self):
+    def _target_coordinate(self, axis: str) -> float:
         tree = self.core.memory.get(self.core.target_id)
-        return tree.x if tree else math.nan
-
-    @property
-    def target_y(self):
-        tree = self.core.memory.get(self.core.target_id)
-        return tree.y if tree else math.nan
+        return getattr(tree, axis) if tree else math.nan
 
 
 # ----------------------------------------------------------------------------------------------------------

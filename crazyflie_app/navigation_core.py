@@ -20,6 +20,7 @@ This module re-exports their public names. After a tree, RETURN_TO_PATH flies ba
 until the cross-track error is below ``returnTolerance``.
 """
 import math
+from collections.abc import Sequence
 
 from crazyflie_app.camera_geometry import CameraGeometry, PoseHistory, merge_duplicates, rotate, unrotate
 from crazyflie_app.frame_input import FrameInput
@@ -30,7 +31,7 @@ from crazyflie_app.nav_types import (PHASE_APPROACH, PHASE_BOOT, PHASE_DONE, PHA
                                      Detection, Event, NavigationParams, Pose)
 from crazyflie_app.path_following import PathFollower, distance_to_segment
 from crazyflie_app.recovery import ABANDON, ABANDON_UNSEEN, Recovery, nearest
-from crazyflie_app.tree_memory import TreeMemory
+from crazyflie_app.tree_memory import StoredTree, TreeMemory
 from crazyflie_app.vertical import NULL_COMMAND, TakeoffRule, landing_setpoint
 from crazyflie_app.visual_servo import VisualServo, servo_velocity
 
@@ -45,7 +46,7 @@ FLYING_PHASES = (PHASE_FOLLOW_PATH, PHASE_RETURN_TO_PATH, PHASE_APPROACH, PHASE_
 class NavigationCore:
     """Algorithm 1. Call ``on_frame`` with each camera frame's detections and ``step`` every control tick."""
 
-    def __init__(self, params, flight_path):
+    def __init__(self, params: NavigationParams, flight_path: Sequence[tuple[float, float]]):
         self.params = params
         self.route = PathFollower(params, flight_path)
         self.camera = CameraGeometry(params)
@@ -75,19 +76,19 @@ class NavigationCore:
     waypoint_index = property(lambda self: self.route.waypoint_index,
                               lambda self, index: setattr(self.route, "waypoint_index", index))
 
-    def pixel_to_world(self, u, v, pose):
+    def pixel_to_world(self, u: float, v: float, pose: Pose) -> tuple[float, float]:
         return self.camera.pixel_to_world(u, v, pose)
 
-    def in_planting_column(self, x, y):
+    def in_planting_column(self, x: float, y: float) -> bool:
         return self.route.in_planting_column(x, y)
 
     # -- camera input -------------------------------------------------------------------------------------
 
-    def on_frame_mark(self, t_ms):
+    def on_frame_mark(self, t_ms: int) -> None:
         """The camera finished a frame (with or without detections): the link is alive."""
         self.link.on_frame_mark(t_ms)
 
-    def on_frame(self, t_ms, detections, pose_now):
+    def on_frame(self, t_ms: int, detections: Sequence[Detection], pose_now: Pose) -> list[int]:
         """Handle the detections of one camera frame, received at ``t_ms`` (captured cam_latency_ms earlier).
 
         Returns, per detection, the id of the stored or visited tree it was associated with (0: ignored,
@@ -120,7 +121,7 @@ class NavigationCore:
 
     # -- control tick -------------------------------------------------------------------------------------
 
-    def step(self, t_ms, pose):
+    def step(self, t_ms: int, pose: Pose) -> Command:
         """One control tick: returns the Command to send."""
         self._poses.append(t_ms, pose)
         self.memory.capacity = max(1, int(self.params.tree_capacity))  # PARAMs may change in flight
@@ -150,13 +151,13 @@ class NavigationCore:
         self._enter(PHASE_LAND, t_ms)
         return self._step_land(t_ms, None)
 
-    def start(self, t_ms):
+    def start(self, t_ms: int) -> None:
         self._enter(PHASE_TAKEOFF, t_ms)
 
-    def abort_no_deck(self, t_ms):
+    def abort_no_deck(self, t_ms: int) -> None:
         self._enter(PHASE_NO_DECK, t_ms)
 
-    def abort_no_camera(self, t_ms):
+    def abort_no_camera(self, t_ms: int) -> None:
         """The app never heard the camera before take-off: stay on the ground (null setpoints)."""
         self._enter(PHASE_NO_CAMERA, t_ms)
 
@@ -211,7 +212,7 @@ class NavigationCore:
 
     # -- target selection and visual approach -------------------------------------------------------------
 
-    def eligible_trees(self):
+    def eligible_trees(self) -> list[StoredTree]:
         p = self.params
         return [t for t in self.memory.trees.values()
                 if t.hits >= p.min_hits and self.route.in_planting_column(t.x, t.y)]

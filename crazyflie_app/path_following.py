@@ -9,11 +9,18 @@ tools import it too, so a map's target trees and the app's T_d agree).
   ``columnFactor`` x ``crownSize`` (the paper: 1.5 crown sizes).
 """
 import math
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # nav_types imports this module (COLUMN_FACTOR)
+    from crazyflie_app.nav_types import NavigationParams, Pose
+
+Point = tuple[float, float]  # (x, y), m
 
 COLUMN_FACTOR = 1.5  # paper: planting column half-width, in crown sizes
 
 
-def distance_to_segment(px, py, a, b):
+def distance_to_segment(px: float, py: float, a: Point, b: Point) -> float:
     """Horizontal distance from point (px, py) to the segment a-b (metres)."""
     dx, dy = b[0] - a[0], b[1] - a[1]
     length2 = dx * dx + dy * dy
@@ -21,7 +28,7 @@ def distance_to_segment(px, py, a, b):
     return math.hypot(px - a[0] - t * dx, py - a[1] - t * dy)
 
 
-def within_column(distance_m, crown_size_m, column_factor=COLUMN_FACTOR):
+def within_column(distance_m: float, crown_size_m: float, column_factor: float = COLUMN_FACTOR) -> bool:
     """The planting-column rule: a tree this far from the flown line is in the column."""
     return distance_m <= column_factor * crown_size_m
 
@@ -29,7 +36,7 @@ def within_column(distance_m, crown_size_m, column_factor=COLUMN_FACTOR):
 class PathFollower:
     """The flight path F, the waypoint being flown to, and the follow law (world velocities)."""
 
-    def __init__(self, params, flight_path):
+    def __init__(self, params: "NavigationParams", flight_path: Sequence[Point]):
         if len(flight_path) < 2:
             raise ValueError("the flight path needs at least 2 waypoints")
         self.params = params
@@ -37,28 +44,28 @@ class PathFollower:
         self.waypoint_index = 0  # the waypoint being flown to
 
     @property
-    def finished(self):
+    def finished(self) -> bool:
         return self.waypoint_index >= len(self.path)
 
     @property
-    def goal(self):
+    def goal(self) -> Point:
         return self.path[self.waypoint_index]
 
-    def current_segment(self):
+    def current_segment(self) -> tuple[Point, Point]:
         k = max(self.waypoint_index, 1)
         k = min(k, len(self.path) - 1)
         return self.path[k - 1], self.path[k]
 
-    def in_planting_column(self, x, y):
+    def in_planting_column(self, x: float, y: float) -> bool:
         a, b = self.current_segment()
         return within_column(distance_to_segment(x, y, a, b), self.params.crown_size_m, self.params.column_factor)
 
-    def cross_track(self, pose):
+    def cross_track(self, pose: "Pose") -> float:
         """Distance of the MAV from the current segment."""
         a, b = self.current_segment()
         return distance_to_segment(pose.x, pose.y, a, b)
 
-    def waypoint_reached(self, pose):
+    def waypoint_reached(self, pose: "Pose") -> bool:
         """Within ``waypoint_tolerance_m`` of the waypoint, or past the end of the segment towards it
         (a gust can carry the MAV past a 3 cm ball; it must not then circle back for it)."""
         goal = self.path[self.waypoint_index]
@@ -70,7 +77,7 @@ class PathFollower:
         dx, dy = goal[0] - a[0], goal[1] - a[1]
         return (pose.x - goal[0]) * dx + (pose.y - goal[1]) * dy >= 0.0
 
-    def follow_velocity(self, pose, goal):
+    def follow_velocity(self, pose: "Pose", goal: Point) -> tuple[float, float]:
         """World velocity: towards a carrot on the current segment (or straight to the first waypoint)."""
         p = self.params
         if self.waypoint_index == 0:

@@ -20,10 +20,11 @@ H = np.array([[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0]])
 I4 = np.eye(4)
 
 
-class PixelKalmanFilter(object):
+class PixelKalmanFilter:
     """Track one target's image position. All arguments in px, px/s and seconds."""
 
-    def __init__(self, u, v, measurement_std_px=3.0, accel_psd=400.0, initial_velocity_std=100.0):
+    def __init__(self, u: float, v: float, measurement_std_px: float = 3.0, accel_psd: float = 400.0,
+                 initial_velocity_std: float = 100.0):
         self.R = np.eye(2) * measurement_std_px ** 2
         self.accel_psd = float(accel_psd)
         self.x = np.array([u, v, 0.0, 0.0], dtype=float)
@@ -33,14 +34,14 @@ class PixelKalmanFilter(object):
         self.predictions = 0
 
     @property
-    def position(self):
+    def position(self) -> tuple[float, float]:
         return float(self.x[0]), float(self.x[1])
 
     @property
-    def velocity(self):
+    def velocity(self) -> tuple[float, float]:
         return float(self.x[2]), float(self.x[3])
 
-    def predict(self, dt):
+    def predict(self, dt: float) -> None:
         """Propagate by ``dt`` seconds (a missed detection is just a predict without update)."""
         if dt < 0:
             raise ValueError("predict: negative dt %r" % dt)
@@ -55,7 +56,7 @@ class PixelKalmanFilter(object):
         self.P = F @ self.P @ F.T + Q
         self.predictions += 1
 
-    def update(self, u, v):
+    def update(self, u: float, v: float) -> np.ndarray:
         """Fuse one measured image position (px)."""
         z = np.array([u, v], dtype=float)
         # y = z - H x ; S = H P H' + R ; K = P H' S^-1
@@ -69,7 +70,7 @@ class PixelKalmanFilter(object):
         self.updates += 1
         return y
 
-    def shift(self, du, dv):
+    def shift(self, du: float, dv: float) -> None:
         """Move the position state by a known image displacement (ego-motion compensation)."""
         self.x[0] += du
         self.x[1] += dv

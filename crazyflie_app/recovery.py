@@ -13,14 +13,17 @@
   within ``dupRadius`` of a reached one was that tree (tree_memory) and is not gone back for.
 """
 import math
+from collections.abc import Iterable
+from typing import Any
 
 from crazyflie_app.camera_geometry import unrotate
-from crazyflie_app.nav_types import Event
+from crazyflie_app.nav_types import Event, NavigationParams, Pose
+from crazyflie_app.tree_memory import StoredTree, TreeMemory
 
 ABANDON, ABANDON_UNSEEN = "abandon", "abandon_unseen"
 
 
-def nearest(items, point):
+def nearest(items: Iterable[Any], point: tuple[float, float]) -> Any:
     """The item (tree or visited entry, with x, y, id) nearest to ``point`` (ties: lowest id)."""
     cx, cy = point
     return min(items, key=lambda t: (math.hypot(t.x - cx, t.y - cy), t.id))
@@ -29,22 +32,23 @@ def nearest(items, point):
 class Recovery:
     """The target and recovery clocks and the going-back state."""
 
-    def __init__(self, params):
+    def __init__(self, params: NavigationParams):
         self.params = params
         self.target_since = 0  # target selected (or, going back, the MAV arrived over s_t)
         self.since = None  # recovery began
         self.revisiting = False  # flying back, before landing, to a tree abandoned while hidden
         self.revisit_arrived = False  # ... and over its stored s_t once
 
-    def reason(self, t_ms, tree, e_d):
+    def reason(self, t_ms: int, tree: StoredTree, e_d: float) -> str:
         """Why the recovery began (its event's detail)."""
         return "e_d %.2f m" % e_d if e_d > self.params.recovery_distance_m else "not seen %d ms" % (
             t_ms - tree.last_ms)
 
-    def target_expired(self, t_ms):
+    def target_expired(self, t_ms: int) -> bool:
         return t_ms - self.target_since > self.params.target_timeout_ms
 
-    def step(self, t_ms, pose, tree, ground_point):
+    def step(self, t_ms: int, pose: Pose, tree: StoredTree,
+             ground_point: tuple[float, float]) -> str | tuple[float, float]:
         """One RECOVERY tick towards s_t of ``tree`` (None: gone): ABANDON, ABANDON_UNSEEN (recovery timed
         out without seeing it again) or the body velocity (vx, vy)."""
         p = self.params
@@ -64,7 +68,9 @@ class Recovery:
             return 0.0, 0.0
         return unrotate(pose.yaw_deg, ex / distance * speed, ey / distance * speed)
 
-    def start_revisit(self, t_ms, memory, ground_point, mav_xy, centre, events):
+    def start_revisit(self, t_ms: int, memory: TreeMemory, ground_point: tuple[float, float],
+                      mav_xy: tuple[float, float], centre: tuple[float, float],
+                      events: list[Event]) -> StoredTree | None:
         """Going back once: restore the flagged tree nearest to ``ground_point`` into T_d (``memory``) as the
         target, at the principal point ``centre``. Returns it, or None if no tree is flagged."""
         flagged = [e for e in memory.visited

@@ -8,6 +8,9 @@ message is dropped whole. If the port cannot be opened or fails while reading (u
 closed pty), it is closed and reopened later with exponential back-off (``REOPEN_BACKOFF_MS`` doubling up to
 ``REOPEN_BACKOFF_MAX_MS``); time is passed in, so the back-off is deterministic in simulation.
 """
+from collections.abc import Callable
+from typing import Any
+
 import serial
 
 from jevois_module.ForaNavTrees.foranav_serial import LineAssembler
@@ -17,8 +20,8 @@ REOPEN_BACKOFF_MAX_MS = 2000
 READ_CHUNK = 4096  # bytes per read call; the loop reads until the driver has nothing more
 
 
-class SerialLink(object):
-    def __init__(self, url, baudrate=115200, port_factory=None):
+class SerialLink:
+    def __init__(self, url: str, baudrate: int = 115200, port_factory: Callable[..., Any] | None = None):
         self.url = url
         self.baudrate = baudrate
         self._factory = port_factory or (lambda: serial.serial_for_url(url, baudrate=baudrate, timeout=0))
@@ -32,14 +35,14 @@ class SerialLink(object):
         self._backoff_ms = REOPEN_BACKOFF_MS
 
     @property
-    def is_open(self):
+    def is_open(self) -> bool:
         return self.port is not None
 
     @property
-    def lines_dropped(self):
+    def lines_dropped(self) -> int:
         return self.assembler.dropped
 
-    def _try_open(self, now_ms):
+    def _try_open(self, now_ms: int) -> bool:
         try:
             self.port = self._factory()
         except (serial.SerialException, OSError, ValueError) as err:
@@ -50,7 +53,7 @@ class SerialLink(object):
         self.assembler = LineAssembler(self.assembler.max_length)  # a half line from before is garbage
         return True
 
-    def _failed(self, now_ms, err):
+    def _failed(self, now_ms: int, err: Exception) -> None:
         self.failures += 1
         self.last_error = str(err)
         if self.port is not None:
@@ -62,7 +65,7 @@ class SerialLink(object):
         self._retry_at_ms = now_ms + self._backoff_ms
         self._backoff_ms = min(2 * self._backoff_ms, REOPEN_BACKOFF_MAX_MS)
 
-    def poll(self, now_ms):
+    def poll(self, now_ms: int) -> list[bytes]:
         """Complete lines (bytes) received since the last poll; [] if none or the port is down."""
         if self.port is None and (now_ms < self._retry_at_ms or not self._try_open(now_ms)):
             return []
@@ -80,7 +83,7 @@ class SerialLink(object):
             self._failed(now_ms, err)
         return lines
 
-    def close(self):
+    def close(self) -> None:
         if self.port is not None:
             try:
                 self.port.close()

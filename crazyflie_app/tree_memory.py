@@ -23,7 +23,11 @@ is dropped from T_d (``absorb_reached``, counted in ``absorbed``) instead of bei
 second time, and an abandoned tree within that distance of a reached one is not gone back for.
 """
 import math
+from collections.abc import Collection, Iterable, Sequence
 from dataclasses import dataclass
+from typing import Any
+
+Point = tuple[float, float]  # (x, y), m
 
 POSITION_AVERAGE_WINDOW = 20  # detections: the stored position is a running mean over about this many
 
@@ -50,8 +54,8 @@ class VisitedTree:
     revisit: bool = False  # abandoned while unseen (hidden): the app goes back for it once before landing
 
 
-class TreeMemory(object):
-    def __init__(self, capacity=32, visited_capacity=64):
+class TreeMemory:
+    def __init__(self, capacity: int = 32, visited_capacity: int = 64):
         if capacity < 1 or visited_capacity < 1:
             raise ValueError("tree memory capacities must be >= 1")
         self.capacity = int(capacity)
@@ -64,13 +68,13 @@ class TreeMemory(object):
         self.absorbed = 0  # stored trees dropped as a reached tree seen again
         self._next_id = 1
 
-    def __len__(self):
+    def __len__(self) -> int:
         return len(self.trees)
 
-    def get(self, tree_id):
+    def get(self, tree_id: int) -> StoredTree | None:
         return self.trees.get(tree_id)
 
-    def associate(self, points, merge_radius):
+    def associate(self, points: Sequence[Point], merge_radius: float) -> list[tuple[str | None, int | None]]:
         """For each world point (x, y) of one frame: ('tree', id), ('visited', id) or (None, None)."""
         pairs = []
         for i, (px, py) in enumerate(points):
@@ -91,7 +95,8 @@ class TreeMemory(object):
                 result[i] = (kind, key if kind == "tree" else self.visited[-1 - key].id)
         return result
 
-    def add(self, x, y, t_ms, u, v, mav_xy, protected=()):
+    def add(self, x: float, y: float, t_ms: int, u: float, v: float, mav_xy: Point,
+            protected: Collection[int] = ()) -> tuple[int, list[int]]:
         """Store a new tree; returns (new id, [ids evicted to make room]), or (0, []) when T_d is full of
         ``protected`` trees (ids that must stay: detections of this frame refer to them)."""
         evicted = []
@@ -108,7 +113,7 @@ class TreeMemory(object):
         self.trees[tree.id] = tree
         return tree.id, evicted
 
-    def evict_to_capacity(self, mav_xy):
+    def evict_to_capacity(self, mav_xy: Point) -> list[int]:
         """After ``capacity`` was lowered (a PARAM set in flight): evict the farthest trees until T_d fits;
         returns their ids."""
         evicted = []
@@ -118,7 +123,7 @@ class TreeMemory(object):
             self.evicted += 1
         return evicted
 
-    def update(self, tree_id, x, y, t_ms, u, v):
+    def update(self, tree_id: int, x: float, y: float, t_ms: int, u: float, v: float) -> None:
         """Merge one more detection into a stored tree (running mean of its position)."""
         t = self.trees[tree_id]
         t.hits += 1
@@ -127,7 +132,7 @@ class TreeMemory(object):
         t.y += weight * (y - t.y)
         t.last_ms, t.u, t.v = t_ms, u, v
 
-    def absorb_reached(self, radius):
+    def absorb_reached(self, radius: float) -> list[tuple[int, int]]:
         """Drop every stored tree within ``radius`` of a reached visited entry (the same tree seen again);
         returns [(dropped id, reached id)]."""
         dropped = []
@@ -140,12 +145,13 @@ class TreeMemory(object):
                 dropped.append((t.id, twin.id))
         return dropped
 
-    def near_reached(self, entry, radius):
+    def near_reached(self, entry: VisitedTree, radius: float) -> bool:
         """True when a reached visited entry lies within ``radius`` of ``entry`` (x, y)."""
         return any(e.reached and e is not entry and math.hypot(entry.x - e.x, entry.y - e.y) <= radius
                    for e in self.visited)
 
-    def mark_visited(self, tree_id, t_ms, mav_xy, reached=True, revisit=False):
+    def mark_visited(self, tree_id: int, t_ms: int, mav_xy: Point, reached: bool = True,
+                     revisit: bool = False) -> StoredTree:
         """Move a tree from T_d to the visited list (reached, or abandoned when reached is False; ``revisit``
         flags an abandoned tree worth going back for once)."""
         t = self.trees.pop(tree_id)
@@ -155,7 +161,8 @@ class TreeMemory(object):
         self.visited.append(VisitedTree(t.id, t.x, t.y, t_ms, reached, revisit))
         return t
 
-    def restore(self, tree_id, hits, u, v, mav_xy):
+    def restore(self, tree_id: int, hits: int, u: float, v: float,
+                mav_xy: Point) -> tuple[StoredTree | None, list[int]]:
         """Move a visited entry back into T_d (same id and position, ``hits`` detections, last seen when it
         was visited, image position (u, v)) so it can be a target again. A full T_d evicts its farthest tree
         first, as ``add`` does. Returns (StoredTree or None if ``tree_id`` is not visited, [ids evicted])."""
@@ -173,6 +180,6 @@ class TreeMemory(object):
         return tree, evicted
 
     @staticmethod
-    def _farthest(items, mav_xy):
+    def _farthest(items: Iterable, mav_xy: Point) -> Any:
         mx, my = mav_xy
         return max(items, key=lambda t: (math.hypot(t.x - mx, t.y - my), -t.id))

@@ -15,10 +15,13 @@
 """
 import math
 
+from crazyflie_app.camera_geometry import CameraGeometry
+from crazyflie_app.nav_types import NavigationParams, Pose
 from crazyflie_app.pixel_kalman import PixelKalmanFilter
 
 
-def servo_velocity(offset_fwd_m, offset_left_m, gain, max_speed, integral=(0.0, 0.0), integral_gain=0.0):
+def servo_velocity(offset_fwd_m: float, offset_left_m: float, gain: float, max_speed: float,
+                   integral: tuple[float, float] = (0.0, 0.0), integral_gain: float = 0.0) -> tuple[float, float]:
     """Visual-servo law: body velocity towards the target, proportional to its metric image offset (plus an
     optional integral term) and saturated (direction kept) at ``max_speed``."""
     vx = gain * offset_fwd_m + integral_gain * integral[0]
@@ -32,7 +35,7 @@ def servo_velocity(offset_fwd_m, offset_left_m, gain, max_speed, integral=(0.0, 
 class VisualServo:
     """The pixel filter of the target and the servo / reached state of one approach."""
 
-    def __init__(self, params, geometry):
+    def __init__(self, params: NavigationParams, geometry: CameraGeometry):
         self.params = params
         self.geometry = geometry  # a CameraGeometry
         self.filter = None  # PixelKalmanFilter while tracking
@@ -43,7 +46,7 @@ class VisualServo:
         self._captured_since = None
         self._integral = (0.0, 0.0)
 
-    def start(self, t_ms, u, v):
+    def start(self, t_ms: int, u: float, v: float) -> None:
         """Track a target first seen (now) at pixel (u, v)."""
         p = self.params
         self.filter = PixelKalmanFilter(u, v, p.kf_measurement_std_px, p.kf_accel_psd)
@@ -52,28 +55,28 @@ class VisualServo:
         self._captured_since = None
         self._integral = (0.0, 0.0)
 
-    def lose(self):
+    def lose(self) -> None:
         """Stop tracking (recovery): the filter is gone."""
         self.filter = None
 
-    def drop(self):
+    def drop(self) -> None:
         """The target is done or gone."""
         self.filter = None
         self.captured = False
 
-    def predict(self, t_ms):
+    def predict(self, t_ms: int) -> None:
         if t_ms > self._filter_t_ms:
             self.filter.predict((t_ms - self._filter_t_ms) / 1000.0)  # real time, in seconds
             self._filter_t_ms = t_ms
 
-    def measure(self, t_ms, u, v):
+    def measure(self, t_ms: int, u: float, v: float) -> None:
         """A detection of the target (ego-corrected pixel); ignored when not tracking."""
         if self.filter is None:
             return
         self.predict(t_ms)
         self.filter.update(u, v)
 
-    def step(self, t_ms, pose, last_tick_ms):
+    def step(self, t_ms: int, pose: Pose, last_tick_ms: int) -> tuple[float, float] | None:
         """One tick of the approach (after ``predict``): None when the reached rule holds, else the body
         velocity (vx, vy) of the servo law."""
         p = self.params
@@ -99,7 +102,7 @@ class VisualServo:
         return servo_velocity(offset[0], offset[1], p.servo_gain, p.approach_speed, self._integral,
                               p.servo_integral)
 
-    def settle_thresholds(self, t_ms):
+    def settle_thresholds(self, t_ms: int) -> tuple[float, float]:
         """(radius px, speed m/s) of the reached rule, relaxed by ``settle_relax`` per second captured."""
         p = self.params
         if self._captured_since is None:

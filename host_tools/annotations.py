@@ -11,6 +11,8 @@ empty label and zero-size box so that it is still part of the data set.
 import csv
 import io
 import math
+import os
+from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -30,16 +32,16 @@ class Box:
     label: str
 
     @property
-    def is_empty_marker(self):
+    def is_empty_marker(self) -> bool:
         return self.label == ""
 
-    def corners(self):
+    def corners(self) -> tuple[float, float, float, float]:
         """(x0, y0, x1, y1) in pixels."""
         return (self.x_center - self.width / 2, self.y_center - self.height / 2,
                 self.x_center + self.width / 2, self.y_center + self.height / 2)
 
 
-def read_boxes(csv_path):
+def read_boxes(csv_path: str | os.PathLike) -> list[Box]:
     """Read a boxes CSV; raises ForaNavError naming the file and row on bad input."""
     csv_path = Path(csv_path)
     text = fileio.read_text(csv_path, "boxes CSV")
@@ -69,7 +71,7 @@ def read_boxes(csv_path):
     return boxes
 
 
-def boxes_by_image(boxes):
+def boxes_by_image(boxes: Iterable[Box]) -> dict[str, list[Box]]:
     """{image: [Box, ...]} in first-seen order; images listed only by an empty marker map to []."""
     out = {}
     for b in boxes:
@@ -79,7 +81,7 @@ def boxes_by_image(boxes):
     return out
 
 
-def format_boxes(boxes):
+def format_boxes(boxes: Iterable[Box]) -> str:
     buf = io.StringIO()
     writer = csv.writer(buf, lineterminator="\n")
     writer.writerow(HEADER)
@@ -88,9 +90,9 @@ def format_boxes(boxes):
     return buf.getvalue()
 
 
-def write_boxes(csv_path, boxes):
+def write_boxes(csv_path: str | os.PathLike, boxes: Iterable[Box]) -> None:
     fileio.write_text(csv_path, format_boxes(boxes))
 
 
-def _num(v):
+def _num(v: float) -> str:
     return ("%.2f" % v).rstrip("0").rstrip(".") if v != int(v) else str(int(v))

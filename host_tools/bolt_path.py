@@ -35,7 +35,7 @@ def path_header(map_name: str) -> str:
                      "altitude": repr(float(pmap.altitude_m)), "label": pmap.target_species or ""}
 
 
-def main(argv=None):
+def main(argv: list[str] | None = None) -> int:
     args = sys.argv[1:] if argv is None else argv
     if len(args) != 1:
         print("usage: python -m host_tools.bolt_path MAP > crazyflie_app/bolt/src/foranav_path.h", file=sys.stderr)

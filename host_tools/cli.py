@@ -12,6 +12,8 @@ import argparse
 import importlib
 import os
 import sys
+from types import ModuleType
+from typing import Any, NoReturn, TextIO
 
 from host_tools import argtypes
 from host_tools.errors import ForaNavError
@@ -41,18 +43,18 @@ COMMANDS = {
 class OneLineParser(argparse.ArgumentParser):
     """An argument error is one line naming the option (argparse prints the whole usage first)."""
 
-    def error(self, message):
+    def error(self, message: str) -> NoReturn:
         self.exit(2, "%s: error: %s (see %s --help)\n" % (self.prog, message, self.prog))
 
 
-class _StdoutGuard(object):
+class _StdoutGuard:
     """stdout that survives its reader going away: after a broken pipe the output goes to /dev/null."""
 
-    def __init__(self, stream):
+    def __init__(self, stream: TextIO):
         self._stream = stream
         self.broken = False
 
-    def _silence(self):
+    def _silence(self) -> None:
         self.broken = True
         try:
             devnull = os.open(os.devnull, os.O_WRONLY)
@@ -61,31 +63,31 @@ class _StdoutGuard(object):
         except (OSError, ValueError, AttributeError):
             self._stream = open(os.devnull, "w")
 
-    def write(self, text):
+    def write(self, text: str) -> int:
         try:
             return self._stream.write(text)
         except BrokenPipeError:
             self._silence()
             return len(text)
 
-    def flush(self):
+    def flush(self) -> None:
         try:
             self._stream.flush()
         except BrokenPipeError:
             self._silence()
 
-    def __getattr__(self, name):
+    def __getattr__(self, name: str) -> Any:
         return getattr(self._stream, name)
 
 
-def _check_seed(parser, args):
+def _check_seed(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
     """Every command's --seed is a seed (0 .. 2**32 - 1), also where the option is declared as a plain int."""
     value = getattr(args, "seed", None)
     if isinstance(value, int) and not 0 <= value <= argtypes.SEED_MAX:
         parser.error("argument --seed: must be an integer from 0 to %d, got %d" % (argtypes.SEED_MAX, value))
 
 
-def build_parser():
+def build_parser() -> OneLineParser:
     parser = OneLineParser(prog="foranav", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", metavar="<command>")
     sub.required = True
@@ -94,7 +96,7 @@ def build_parser():
     return parser
 
 
-def parse_command(argv):
+def parse_command(argv: list[str]) -> tuple[str, ModuleType, argparse.Namespace]:
     """(command name, its module, parsed args); SystemExit on --help or an argument error (one line)."""
     if not argv or argv[0] in ("-h", "--help") or argv[0] not in COMMANDS:
         build_parser().parse_args(argv)  # prints usage / error and exits
@@ -108,7 +110,7 @@ def parse_command(argv):
     return name, module, args
 
 
-def quiet_opencv():
+def quiet_opencv() -> None:
     """OpenCV and its FFmpeg print warnings straight to stderr (a missing image, a damaged video) next to the
     CLI's own one-line error; set before cv2 loads. OPENCV_LOG_LEVEL / OPENCV_FFMPEG_LOGLEVEL set by the user
     still win."""
@@ -116,7 +118,7 @@ def quiet_opencv():
     os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")  # AV_LOG_QUIET
 
 
-def main(argv=None):
+def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     quiet_opencv()
     try:

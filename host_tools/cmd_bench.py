@@ -7,6 +7,7 @@ detector: ms per frame and FPS of the tree detector at 352x288, 640x480 and 1280
           speed-up over the per-window reference implementation.
 sweep:    flights per CPU-second and the 1 -> 2 Dask worker speed-up (--camera sim|oracle, --count N).
 """
+import argparse
 import importlib
 
 from host_tools import argtypes
@@ -20,7 +21,7 @@ TARGETS = {
 }
 
 
-def add_arguments(parser):
+def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("target", choices=sorted(TARGETS), help="what to benchmark")
     parser.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
     parser.add_argument("--seed", type=argtypes.seed, default=0, help="seed of the rendered test frames")
@@ -30,5 +31,5 @@ def add_arguments(parser):
     add_appearance_arguments(parser)  # bench sim: --crowns / --ground
 
 
-def run(args):
+def run(args: argparse.Namespace) -> int:
     return importlib.import_module(TARGETS[args.target]).run(args)

@@ -14,16 +14,17 @@ Examples:
   foranav plantation --seed 7 --columns 3 --altitude-m 1.0 --off-column-palms 2 --out p.json
   foranav fly --map runs/p7.json --camera oracle
 """
+import argparse
 import dataclasses
 import json
 import re
 
 from host_tools import argtypes, fileio
 from host_tools.errors import ForaNavError
-from host_tools.plantation import INTEGER_RANGES, PlantationRanges, plantation_dict
+from host_tools.plantation import INTEGER_RANGES, PlantationRanges, generate, plantation_dict
 
 
-def add_range_arguments(parser):
+def add_range_arguments(parser: argparse.ArgumentParser) -> None:
     """One --<range> option per PlantationRanges field (LO:HI or a value)."""
     defaults = PlantationRanges()
     for f in dataclasses.fields(PlantationRanges):
@@ -32,7 +33,7 @@ def add_range_arguments(parser):
                             help="range of %s (default %s:%s)" % (f.name, lo, hi))
 
 
-def ranges_from_args(args):
+def ranges_from_args(args: argparse.Namespace) -> PlantationRanges:
     """PlantationRanges with the given options applied (ForaNavError naming a bad option)."""
     overrides = {}
     for f in dataclasses.fields(PlantationRanges):
@@ -57,14 +58,13 @@ def ranges_from_args(args):
                                   str(err)))
 
 
-def add_arguments(parser):
+def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seed", type=argtypes.seed, default=0, help="seed of every random choice (default 0)")
     parser.add_argument("--out", help="write the map here (default: print it)")
     add_range_arguments(parser)
 
 
-def run(args):
-    from host_tools.plantation import generate
+def run(args: argparse.Namespace) -> int:
 
     ranges = ranges_from_args(args)
     data = plantation_dict(args.seed, ranges)

@@ -5,12 +5,19 @@ navigation app reads them with pyserial on the emulated firmware and flies to ev
 Shows a progress bar while it flies, then a short summary table, and says where the trajectory plot and the
 MAVLink telemetry log (open it in QGroundControl or MAVExplorer) were written (default runs/demo/).
 """
+import argparse
 import math
 import sys
 import time
 from pathlib import Path
 
+from crazyflie_app.navigation_core import NavigationParams
 from host_tools import argtypes, fileio
+from host_tools.flight.cmd_fly import print_table
+from host_tools.flight.harness import run_flight
+from host_tools.flight.vision_camera import VisionCamera, model_option
+from host_tools.maps import PlantationMap, load_map
+from host_tools.sim.cli_args import add_appearance_arguments, appearance_from_args, photo_summary
 
 DEMO_MAP = "map1"
 DEMO_SEED = 0
@@ -19,29 +26,28 @@ SECONDS_PER_TARGET = 7.0  # rough: approach, settle and return to the path (for 
 TAKEOFF_AND_LANDING_S = 10.0
 
 
-def add_arguments(parser):
+def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", default="runs/demo", help="output folder (default runs/demo/)")
     parser.add_argument("--seed", type=argtypes.seed, default=DEMO_SEED, help="seed of every random choice (default 0)")
     parser.add_argument("--model", metavar="M", default=None,
                         help="the module runs with this model file (.npz) (default: the oil palm model)")
-    from host_tools.sim.cli_args import add_appearance_arguments
     add_appearance_arguments(parser)
 
 
-def estimated_mission_s(pmap, cruise_speed):
+def estimated_mission_s(pmap: PlantationMap, cruise_speed: float) -> float:
     """A rough mission time for the progress bar: the path at cruise speed plus a few seconds per target."""
     length = sum(math.hypot(bx - ax, by - ay) for (ax, ay), (bx, by) in zip(pmap.waypoints, pmap.waypoints[1:]))
     return length / cruise_speed + SECONDS_PER_TARGET * len(pmap.targets) + TAKEOFF_AND_LANDING_S
 
 
-def progress_line(t_s, phase, estimate_s, width=BAR_WIDTH):
+def progress_line(t_s: float, phase: str, estimate_s: float, width: int = BAR_WIDTH) -> str:
     """'[#######-----------]  37%  t =  42 s  APPROACH' (capped at 99 % until the flight is over)."""
     fraction = min(0.99, max(0.0, t_s / estimate_s))
     filled = int(round(fraction * width))
     return "[%s%s] %3d%%  t = %4.0f s  %-14s" % ("#" * filled, "-" * (width - filled), 100 * fraction, t_s, phase)
 
 
-class _Bar(object):
+class _Bar:
     def __init__(self, estimate_s, stream):
         self.estimate_s, self.stream = estimate_s, stream
         self.interactive = stream.isatty()
@@ -64,14 +70,7 @@ class _Bar(object):
         self.stream.flush()
 
 
-def run(args):
-    import host_tools.flight  # noqa: F401  first: it makes BLAS single-threaded before numpy loads (2x faster)
-    from crazyflie_app.navigation_core import NavigationParams
-    from host_tools.flight.cmd_fly import print_table
-    from host_tools.flight.harness import run_flight
-    from host_tools.flight.vision_camera import VisionCamera, model_option
-    from host_tools.maps import load_map
-    from host_tools.sim.cli_args import appearance_from_args, photo_summary
+def run(args: argparse.Namespace) -> int:
 
     out = fileio.check_output_dir(Path(args.out))
     pmap = load_map(DEMO_MAP)

@@ -10,21 +10,23 @@ import contextlib
 import json
 import os
 import tempfile
+from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 from host_tools.errors import ForaNavError
 
 MAX_TEXT_BYTES = 256 * 1024 * 1024  # a map, CSV or clip sidecar larger than this is not one of ours
 
 
-def _umask():
+def _umask() -> int:
     mask = os.umask(0)
     os.umask(mask)
     return mask
 
 
 @contextlib.contextmanager
-def atomic_path(path):
+def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     """Yield a temporary path next to ``path`` (same suffix); rename it to ``path`` on success.
 
     For writers that want a file name (``cv2.imwrite``, ``np.savez``, matplotlib ``savefig``).
@@ -44,22 +46,22 @@ def atomic_path(path):
             os.unlink(tmp)
 
 
-def write_figure(figure, path, **savefig_options):
+def write_figure(figure: Any, path: str | os.PathLike, **savefig_options: Any) -> None:
     """A matplotlib figure written atomically, with no software/date stamp (same data, same bytes)."""
     with atomic_path(path) as tmp:
         figure.savefig(str(tmp), metadata={"Software": None}, **savefig_options)
 
 
-def write_bytes(path, data: bytes):
+def write_bytes(path: str | os.PathLike, data: bytes) -> None:
     with atomic_path(path) as tmp:
         tmp.write_bytes(data)
 
 
-def write_text(path, text: str):
+def write_text(path: str | os.PathLike, text: str) -> None:
     write_bytes(path, text.encode("utf-8"))
 
 
-def write_json(path, obj, indent=2):
+def write_json(path: str | os.PathLike, obj: Any, indent: int | None = 2) -> None:
     write_text(path, json.dumps(obj, indent=indent, sort_keys=False) + "\n")
 
 
@@ -85,7 +87,7 @@ def _nearest_existing(path: Path) -> Path:
     return path
 
 
-def check_output_file(path, option: str = "--out") -> Path:
+def check_output_file(path: str | os.PathLike, option: str = "--out") -> Path:
     """Refuse (ForaNavError) an output file that cannot be written: a folder, a parent folder that is missing
     or is a file, a read-only folder. Creates nothing."""
     path = Path(path)
@@ -98,13 +100,11 @@ def check_output_file(path, option: str = "--out") -> Path:
         raise ForaNavError("%s %s: folder %s does not exist" % (option, path, parent))
     if not parent.is_dir():
         raise ForaNavError("%s %s: %s is not a folder" % (option, path, parent))
-    reason = writable_reason(parent)
-    if reason:
-        raise ForaNavError("%s %s: cannot write in %s: %s" % (option, path, parent, reason))
+    _check_writable(option, path, parent)
     return path
 
 
-def check_output_dir(path, option: str = "--out") -> Path:
+def check_output_dir(path: str | os.PathLike, option: str = "--out") -> Path:
     """Refuse (ForaNavError) an output folder that cannot be written: an existing file, a path through a file,
     a read-only folder. A missing folder is fine when it can be created (its nearest existing ancestor is a
     writable folder); it is not created here."""
@@ -116,16 +116,20 @@ def check_output_dir(path, option: str = "--out") -> Path:
     existing = _nearest_existing(path)
     if not existing.is_dir():
         raise ForaNavError("%s %s: %s is a file, not a folder" % (option, path, existing))
-    reason = writable_reason(existing)
-    if reason:
-        raise ForaNavError("%s %s: cannot write in %s: %s" % (option, path, existing, reason))
+    _check_writable(option, path, existing)
     return path
+
+
+def _check_writable(option: str, path: Path, folder: Path) -> None:
+    reason = writable_reason(folder)
+    if reason:
+        raise ForaNavError("%s %s: cannot write in %s: %s" % (option, path, folder, reason))
 
 
 # ---- input files -------------------------------------------------------------------------------------------
 
 
-def read_text(path, what: str = "file", max_bytes: int = MAX_TEXT_BYTES) -> str:
+def read_text(path: str | os.PathLike, what: str = "file", max_bytes: int = MAX_TEXT_BYTES) -> str:
     """A UTF-8 text file, or ForaNavError naming it: missing, a folder, unreadable, too big, not UTF-8."""
     path = Path(path)
     try:
@@ -144,7 +148,7 @@ def read_text(path, what: str = "file", max_bytes: int = MAX_TEXT_BYTES) -> str:
         raise ForaNavError("%s: %s is not UTF-8 text (byte 0x%02x on line %d)" % (path, what, data[err.start], line))
 
 
-def read_json(path, what: str = "JSON file", **loads_kwargs):
+def read_json(path: str | os.PathLike, what: str = "JSON file", **loads_kwargs: Any) -> Any:
     """Decoded JSON of a UTF-8 file, or ForaNavError naming it (also for nesting too deep to decode)."""
     text = read_text(path, what)
     try:

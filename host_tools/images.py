@@ -71,7 +71,7 @@ def check_image_bytes(data: bytes, name: str) -> None:
         raise ForaNavError("%s: truncated JPEG (its last scan has no end-of-image marker)" % name)
 
 
-def read_image(path) -> np.ndarray:
+def read_image(path: str | Path) -> np.ndarray:
     """A BGR image (uint8, 3 channels) from a file, checked as the module docstring says."""
     path = Path(path)
     try:

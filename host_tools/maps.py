@@ -21,7 +21,9 @@ Bad files raise ForaNavError with one line naming the file and the field, e.g.
 ``maps/x.json: trees[2].crown_m: must be a positive number``.
 """
 import math
-from dataclasses import dataclass, field, asdict
+import os
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 from crazyflie_app.path_following import COLUMN_FACTOR, distance_to_segment, within_column
@@ -33,6 +35,7 @@ OBJECT_KINDS = ("roof", "road_cross")
 COLUMN_RULE_FACTOR = COLUMN_FACTOR  # paper: trees farther than 1.5 crown sizes from the path are outside the column
 BUILTIN_DIR = Path(__file__).resolve().parent / "data" / "maps"
 MAX_SEED = 2 ** 32 - 1  # numpy's RandomState takes seeds up to this
+Point = tuple[float, float]  # (x, y), m
 MAX_INTEGER_NUMBER = 10 ** 15  # an integer beyond this in a map is a typo (and beyond 1e308 float() fails)
 
 
@@ -59,30 +62,30 @@ class WorldObject:
 class PlantationMap:
     name: str
     altitude_m: float
-    waypoints: tuple  # ((x, y), ...)
-    trees: tuple  # (Tree, ...)
-    objects: tuple = ()
+    waypoints: tuple[Point, ...]
+    trees: tuple[Tree, ...]
+    objects: tuple[WorldObject, ...] = ()
     seed: int = 0
     target_species: str = "oil_palm"
     source: str = field(default="", compare=False)
 
     @property
-    def targets(self):
+    def targets(self) -> tuple[Tree, ...]:
         return tuple(t for t in self.trees if t.target)
 
-    def tree(self, tree_id):
+    def tree(self, tree_id: int) -> Tree:
         for t in self.trees:
             if t.id == tree_id:
                 return t
         raise KeyError(tree_id)
 
 
-def distance_to_path(px, py, waypoints):
+def distance_to_path(px: float, py: float, waypoints: Sequence[Point]) -> float:
     """Horizontal distance from point p to the nearest segment of the path (the app's segment geometry)."""
     return min(distance_to_segment(px, py, a, b) for a, b in zip(waypoints[:-1], waypoints[1:]))
 
 
-def in_planting_column(x, y, crown_m, waypoints):
+def in_planting_column(x: float, y: float, crown_m: float, waypoints: Sequence[Point]) -> bool:
     """The app's planting-column rule, against every segment of the path."""
     return within_column(distance_to_path(x, y, waypoints), crown_m, COLUMN_RULE_FACTOR)
 
@@ -147,7 +150,7 @@ class _Checker:
         return value
 
 
-def map_from_dict(data, source="<map>"):
+def map_from_dict(data: dict, source: str = "<map>") -> PlantationMap:
     """Validate a decoded JSON object and build a PlantationMap."""
     c = _Checker(source)
     c.fields(data, "", ("name", "altitude_m", "waypoints", "trees"),
@@ -199,7 +202,7 @@ def map_from_dict(data, source="<map>"):
     return PlantationMap(name, altitude, waypoints, tuple(trees), tuple(objects), seed, target_species, source)
 
 
-def map_to_dict(pmap):
+def map_to_dict(pmap: PlantationMap) -> dict:
     """The JSON object of a map (targets written out explicitly)."""
     data = {"name": pmap.name, "altitude_m": pmap.altitude_m,
             "waypoints": [list(wp) for wp in pmap.waypoints],
@@ -211,11 +214,11 @@ def map_to_dict(pmap):
     return data
 
 
-def builtin_map_names():
+def builtin_map_names() -> list[str]:
     return sorted(p.stem for p in BUILTIN_DIR.glob("*.json"))
 
 
-def resolve_map_path(name_or_path):
+def resolve_map_path(name_or_path: str | os.PathLike) -> Path:
     """A path to a map file, or the name of a built-in map (map1, map2, map3, ...)."""
     path = Path(name_or_path)
     if path.suffix == "" and not path.exists():
@@ -227,12 +230,12 @@ def resolve_map_path(name_or_path):
     return path
 
 
-def load_map(name_or_path):
+def load_map(name_or_path: str | os.PathLike) -> PlantationMap:
     """Load and validate a map file (or a built-in map by name)."""
     path = resolve_map_path(name_or_path)
     data = fileio.read_json(path, "map file", parse_constant=lambda c: float("nan"))
     return map_from_dict(data, str(path))
 
 
-def save_map(pmap, path):
+def save_map(pmap: PlantationMap, path: str | os.PathLike) -> None:
     fileio.write_json(path, map_to_dict(pmap))

@@ -67,7 +67,7 @@ class PlantationRanges:
     road_crossings: tuple = (0, 1)  # road crossings in a gap of a column (under the path)
     altitude_m: tuple = (1.0, 1.5)  # flight height
 
-    def validate(self):
+    def validate(self) -> "PlantationRanges":
         for f in dataclasses.fields(self):
             lo, hi = getattr(self, f.name)
             if not (isinstance(lo, (int, float)) and isinstance(hi, (int, float))) or lo > hi:
@@ -90,7 +90,7 @@ class PlantationRanges:
                                % min_spacing)
         return self
 
-    def with_overrides(self, **ranges):
+    def with_overrides(self, **ranges: tuple[float, float]) -> "PlantationRanges":
         return dataclasses.replace(self, **ranges).validate()
 
 
@@ -105,7 +105,7 @@ def _rule_m(crown_m):
     return COLUMN_RULE_FACTOR * crown_m, COLUMN_RULE_FACTOR * APP_CROWN_M
 
 
-class _Layout(object):
+class _Layout:
     """Trees and objects placed so far, with the overlap test."""
 
     def __init__(self):
@@ -122,7 +122,7 @@ class _Layout(object):
         return True
 
 
-def generate(seed, ranges=None):
+def generate(seed: int, ranges: PlantationRanges | None = None) -> tuple[PlantationMap, dict]:
     """A random plantation (see the module docstring) -> (PlantationMap, factors)."""
     ranges = (ranges or PlantationRanges()).validate()
     rng = np.random.default_rng([int(seed), 0x91A7])
@@ -264,7 +264,7 @@ def _check_unambiguous(trees, waypoints):
             raise AssertionError("plantation: tree %d at %.3f m from the path is ambiguous" % (tree.id, distance))
 
 
-def plantation_dict(seed, ranges=None):
+def plantation_dict(seed: int, ranges: PlantationRanges | None = None) -> dict:
     """The map JSON object of ``generate(seed, ranges)`` (round-trips through the loader unchanged)."""
     pmap, _ = generate(seed, ranges)
     data = map_to_dict(pmap)

@@ -8,43 +8,47 @@ two of its own delays, so shared state needs no locks; FreeRTOS time slicing at 
 Everything is deterministic: no wall clock, no threads.
 """
 import heapq
+from collections.abc import Iterator
 
 TICK_RATE_HZ = 1000  # configTICK_RATE_HZ: 1 tick = 1 ms
 PORT_MAX_DELAY = 0xFFFFFFFF  # portMAX_DELAY: park the task forever
 
 
-def m2t(ms):
+def m2t(ms: float) -> int:
     """M2T(ms): milliseconds to ticks (identity at 1 kHz)."""
     return int(ms)
 
 
-def t2m(ticks):
+def t2m(ticks: float) -> int:
     """T2M(ticks): ticks to milliseconds (identity at 1 kHz)."""
     return int(ticks)
 
 
-def f2t(hz):
+def f2t(hz: float) -> int:
     """F2T(hz): the period of a rate, in ticks."""
     return int(round(TICK_RATE_HZ / hz))
 
 
-class Delay(object):
+class Delay:
     """What a task yields: sleep this many ticks (vTaskDelay)."""
 
     __slots__ = ("ticks",)
 
-    def __init__(self, ticks):
+    def __init__(self, ticks: int):
         if ticks < 0:
             raise ValueError("vTaskDelay: negative delay %r" % ticks)
         self.ticks = int(ticks)
 
 
-def v_task_delay(ticks):
+Task = Iterator[Delay]  # a task: a generator that yields v_task_delay(ticks)
+
+
+def v_task_delay(ticks: int) -> Delay:
     """vTaskDelay(ticks): ``yield v_task_delay(M2T(10))`` inside a task."""
     return Delay(ticks)
 
 
-class Scheduler(object):
+class Scheduler:
     """The tick clock and the ready list.
 
     ``x_task_get_tick_count()`` is the current tick. ``x_task_create(generator, name, priority)`` adds a task
@@ -59,17 +63,17 @@ class Scheduler(object):
         self._created = 0
         self.stopped = False
 
-    def x_task_get_tick_count(self):
+    def x_task_get_tick_count(self) -> int:
         return self._now
 
-    def x_task_create(self, generator, name, priority):
+    def x_task_create(self, generator: Task, name: str, priority: int) -> None:
         heapq.heappush(self._ready, (self._now, -priority, self._created, name, generator))
         self._created += 1
 
-    def task_names(self):
+    def task_names(self) -> list[str]:
         return sorted(entry[3] for entry in self._ready)
 
-    def run_until(self, tick):
+    def run_until(self, tick: int) -> bool:
         """Run tasks in wake order up to (excluding) ``tick``; return False if stop() was called."""
         while self._ready and self._ready[0][0] < tick and not self.stopped:
             wake, neg_priority, order, name, task = heapq.heappop(self._ready)
@@ -87,5 +91,5 @@ class Scheduler(object):
             self._now = max(self._now, tick)
         return not self.stopped
 
-    def stop(self):
+    def stop(self) -> None:
         self.stopped = True

@@ -13,7 +13,8 @@ Tables are declared like the C macros (``LOG_GROUP_START(app) LOG_ADD(LOG_FLOAT,
 
 where the third field names the attribute of the owning object (the C ``&variable``).
 """
-from collections import namedtuple
+from collections.abc import Iterable
+from dataclasses import dataclass
 
 LOG_VARID_INVALID = 0xFFFF
 PARAM_VARID_INVALID = 0xFFFF
@@ -26,48 +27,70 @@ _INTEGER_TYPES = (LOG_UINT8, LOG_UINT16, LOG_UINT32, LOG_INT8, LOG_INT16, LOG_IN
 _INTEGER_RANGES = {"uint8_t": (0, 255), "uint16_t": (0, 65535), "uint32_t": (0, 2 ** 32 - 1),
                    "int8_t": (-128, 127), "int16_t": (-32768, 32767), "int32_t": (-2 ** 31, 2 ** 31 - 1)}
 
-ParamVarId = namedtuple("ParamVarId", "id index")
-Entry = namedtuple("Entry", "type name attribute unit doc read_only")
-Group = namedtuple("Group", "group entries")
+
+@dataclass(frozen=True)
+class ParamVarId:
+    """paramVarId_t: the param's id (PARAM_VARID_INVALID when unknown) and its table index."""
+    id: int
+    index: int
+
+
+@dataclass(frozen=True)
+class Entry:
+    """One LOG_ADD / PARAM_ADD line: C type, name, the owner's attribute (the C ``&variable``), unit, doc."""
+    type: str
+    name: str
+    attribute: str
+    unit: str
+    doc: str
+    read_only: bool
+
+
+@dataclass(frozen=True)
+class Group:
+    """A LOG_GROUP / PARAM_GROUP: its name and entries, in declaration order."""
+    group: str
+    entries: tuple
 
 
 class FirmwareAssertError(AssertionError):
     """A failed firmware ASSERT (on the MAV: halt, LED pattern, 'assert failed' on the console)."""
 
 
-def log_add(var_type, name, attribute, unit="", doc=""):
+def log_add(var_type: str, name: str, attribute: str, unit: str = "", doc: str = "") -> Entry:
     return Entry(var_type, name, attribute, unit, doc, True)
 
 
-def param_add(var_type, name, attribute, unit="", doc="", read_only=False):
+def param_add(var_type: str, name: str, attribute: str, unit: str = "", doc: str = "",
+              read_only: bool = False) -> Entry:
     return Entry(var_type, name, attribute, unit, doc, read_only)
 
 
-def log_group(group, entries):
+def log_group(group: str, entries: Iterable[Entry]) -> Group:
     return Group(group, tuple(entries))
 
 
-def param_group(group, entries):
+def param_group(group: str, entries: Iterable[Entry]) -> Group:
     return Group(group, tuple(entries))
 
 
-class _Variable(object):
+class _Variable:
     __slots__ = ("group", "entry", "owner")
 
-    def __init__(self, group, entry, owner):
+    def __init__(self, group: str, entry: Entry, owner: object):
         self.group, self.entry, self.owner = group, entry, owner
 
     @property
-    def full_name(self):
+    def full_name(self) -> str:
         return "%s.%s" % (self.group, self.entry.name)
 
-    def get(self):
+    def get(self) -> float | int:
         value = getattr(self.owner, self.entry.attribute)
         if self.entry.type in _INTEGER_TYPES:
             return int(value)
         return float(value)
 
-    def set(self, value):
+    def set(self, value: float | int) -> None:
         if self.entry.type in _INTEGER_TYPES:
             low, high = _INTEGER_RANGES[self.entry.type]
             value = int(value)
@@ -77,7 +100,7 @@ class _Variable(object):
         setattr(self.owner, self.entry.attribute, value)
 
 
-class LogParamRegistry(object):
+class LogParamRegistry:
     """The log and param tables of one firmware image, in registration order (ids are table indices)."""
 
     def __init__(self):
@@ -88,10 +111,10 @@ class LogParamRegistry(object):
 
     # -- registration (what the LOG_GROUP/PARAM_GROUP macros do at link time) -----------------------------
 
-    def register_log_group(self, table, owner):
+    def register_log_group(self, table: Group, owner: object) -> None:
         self._register(table, owner, self._logs, self._log_index)
 
-    def register_param_group(self, table, owner):
+    def register_param_group(self, table: Group, owner: object) -> None:
         self._register(table, owner, self._params, self._param_index)
 
     @staticmethod
@@ -107,10 +130,10 @@ class LogParamRegistry(object):
 
     # -- log API (log.h) ---------------------------------------------------------------------------------
 
-    def log_get_var_id(self, group, name):
+    def log_get_var_id(self, group: str, name: str) -> int:
         return self._log_index.get((group, name), LOG_VARID_INVALID)
 
-    def log_var_id_is_valid(self, var_id):
+    def log_var_id_is_valid(self, var_id: int) -> bool:
         return var_id != LOG_VARID_INVALID
 
     def _log_variable(self, var_id, caller):
@@ -119,25 +142,25 @@ class LogParamRegistry(object):
                                                                       if isinstance(var_id, int) else 0xFFFF))
         return self._logs[var_id]
 
-    def log_get_float(self, var_id):
+    def log_get_float(self, var_id: int) -> float:
         return float(self._log_variable(var_id, "logGetFloat").get())
 
-    def log_get_int(self, var_id):
+    def log_get_int(self, var_id: int) -> int:
         return int(self._log_variable(var_id, "logGetInt").get())
 
-    def log_get_uint(self, var_id):
+    def log_get_uint(self, var_id: int) -> int:
         return int(self._log_variable(var_id, "logGetUint").get()) & 0xFFFFFFFF
 
-    def log_get_type(self, var_id):
+    def log_get_type(self, var_id: int) -> str:
         return self._log_variable(var_id, "logGetType").entry.type
 
-    def log_get_group_and_name(self, var_id):
+    def log_get_group_and_name(self, var_id: int) -> tuple[str, str]:
         v = self._log_variable(var_id, "logGetGroupAndName")
         return v.group, v.entry.name
 
     # -- param API (param_logic.h) -----------------------------------------------------------------------
 
-    def param_get_var_id(self, group, name):
+    def param_get_var_id(self, group: str, name: str) -> ParamVarId:
         index = self._param_index.get((group, name))
         return ParamVarId(PARAM_VARID_INVALID, 0) if index is None else ParamVarId(index, index)
 
@@ -147,16 +170,16 @@ class LogParamRegistry(object):
             raise FirmwareAssertError("%s: invalid param id %r" % (caller, var_id))
         return self._params[var_id.id]
 
-    def param_get_int(self, var_id):
+    def param_get_int(self, var_id: ParamVarId) -> int:
         v = self._param_variable(var_id, "paramGetInt")
         if v.entry.type not in _INTEGER_TYPES:
             raise FirmwareAssertError("paramGetInt: %s is a %s" % (v.full_name, v.entry.type))
         return int(v.get())
 
-    def param_get_uint(self, var_id):
+    def param_get_uint(self, var_id: ParamVarId) -> int:
         return self.param_get_int(var_id) & 0xFFFFFFFF
 
-    def param_get_float(self, var_id):
+    def param_get_float(self, var_id: ParamVarId) -> float:
         v = self._param_variable(var_id, "paramGetFloat")
         if v.entry.type != PARAM_FLOAT:
             raise FirmwareAssertError("paramGetFloat: %s is a %s" % (v.full_name, v.entry.type))
@@ -168,13 +191,13 @@ class LogParamRegistry(object):
             raise FirmwareAssertError("%s: %s is read-only" % (caller, v.full_name))
         return v
 
-    def param_set_int(self, var_id, value):
+    def param_set_int(self, var_id: ParamVarId, value: int) -> None:
         v = self._param_writable(var_id, "paramSetInt")
         if v.entry.type not in _INTEGER_TYPES:
             raise FirmwareAssertError("paramSetInt: %s is a %s" % (v.full_name, v.entry.type))
         v.set(value)
 
-    def param_set_float(self, var_id, value):
+    def param_set_float(self, var_id: ParamVarId, value: float) -> None:
         v = self._param_writable(var_id, "paramSetFloat")
         if v.entry.type != PARAM_FLOAT:
             raise FirmwareAssertError("paramSetFloat: %s is a %s" % (v.full_name, v.entry.type))
@@ -182,7 +205,7 @@ class LogParamRegistry(object):
 
     # -- by full name, for clients and the harness (cflib's 'group.name' strings) ------------------------
 
-    def log_read(self, full_name):
+    def log_read(self, full_name: str) -> float | int:
         """Read a log variable by 'group.name'; unknown names fail loudly (KeyError naming the variable)."""
         group, _, name = full_name.partition(".")
         var_id = self.log_get_var_id(group, name)
@@ -190,7 +213,7 @@ class LogParamRegistry(object):
             raise KeyError("no log variable %r" % full_name)
         return self._logs[var_id].get()
 
-    def param_set(self, full_name, value):
+    def param_set(self, full_name: str, value: float) -> None:
         """Set a param by 'group.name' (as a client does over the radio); unknown names fail loudly."""
         group, _, name = full_name.partition(".")
         var_id = self.param_get_var_id(group, name)
@@ -202,15 +225,15 @@ class LogParamRegistry(object):
         else:
             self.param_set_int(var_id, value)
 
-    def param_read(self, full_name):
+    def param_read(self, full_name: str) -> float | int:
         group, _, name = full_name.partition(".")
         var_id = self.param_get_var_id(group, name)
         if var_id.id == PARAM_VARID_INVALID:
             raise KeyError("no parameter %r" % full_name)
         return self._params[var_id.id].get()
 
-    def log_names(self):
+    def log_names(self) -> list[str]:
         return [v.full_name for v in self._logs]
 
-    def param_entries(self):
+    def param_entries(self) -> list[tuple[str, Entry]]:
         return [(v.full_name, v.entry) for v in self._params]

@@ -21,6 +21,8 @@ import math
 import random
 from dataclasses import dataclass
 
+from crazyflie_app.firmware.commander import setpoint_t
+
 GRAVITY = 9.81
 POSITION_KP = 2.0  # 1/s, PID_POS_X_KP
 POSITION_VEL_MAX = 1.1  # m/s, PID_POS_VEL_X_MAX * 1.1
@@ -48,7 +50,7 @@ class MavModelConfig:
     wind_gust_mps2: float = 0.0  # std of the gust acceleration (0 = still air)
     wind_tau_s: float = 2.0
 
-    def validate(self):
+    def validate(self) -> "MavModelConfig":
         if self.estimator not in ("uwb", "flow"):
             raise ValueError("estimator must be 'uwb' or 'flow', got %r" % self.estimator)
         for name in ("velocity_tau_s", "vertical_tau_s", "yaw_tau_s", "drag_tau_s", "wind_tau_s"):
@@ -57,24 +59,30 @@ class MavModelConfig:
         return self
 
 
-class State(object):
-    __slots__ = ("x", "y", "z", "vx", "vy", "vz", "yaw")
+@dataclass(slots=True)
+class State:
+    """A pose and velocity (truth or estimate): m, m/s, yaw in degrees."""
+    x: float = 0.0
+    y: float = 0.0
+    z: float = 0.0
+    vx: float = 0.0
+    vy: float = 0.0
+    vz: float = 0.0
+    yaw: float = 0.0
 
-    def __init__(self, x=0.0, y=0.0, z=0.0, vx=0.0, vy=0.0, vz=0.0, yaw=0.0):
-        self.x, self.y, self.z, self.vx, self.vy, self.vz, self.yaw = x, y, z, vx, vy, vz, yaw
-
-    def as_tuple(self):
+    def as_tuple(self) -> tuple[float, ...]:
         return (self.x, self.y, self.z, self.vx, self.vy, self.vz, self.yaw)
 
 
-def _clamp(value, limit):
+def _clamp(value: float, limit: float) -> float:
     return limit if value > limit else (-limit if value < -limit else value)
 
 
-class MavModel(object):
+class MavModel:
     """Truth (``self.truth``) and estimate (``self.estimate``), stepped by the stabilizer task."""
 
-    def __init__(self, config=None, seed=0, start=(0.0, 0.0, 0.0), start_yaw_deg=0.0):
+    def __init__(self, config: MavModelConfig | None = None, seed: int = 0,
+                 start: tuple[float, float, float] = (0.0, 0.0, 0.0), start_yaw_deg: float = 0.0):
         self.config = (config or MavModelConfig()).validate()
         self._rng = random.Random(seed)
         self.truth = State(*start, yaw=start_yaw_deg)
@@ -126,7 +134,7 @@ class MavModel(object):
 
     # -- plant -----------------------------------------------------------------------------------------
 
-    def step(self, dt, sp, motors_on):
+    def step(self, dt: float, sp: setpoint_t, motors_on: bool) -> None:
         """Advance truth and estimate by ``dt`` seconds under setpoint ``sp`` (already supervisor-overridden)."""
         if dt <= 0:
             return

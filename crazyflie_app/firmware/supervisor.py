@@ -21,7 +21,9 @@ motors off the MAV counts as LANDED and the watchdog no longer applies.
 ARMING spin-up state (without bidirectional DShot the firmware passes it on the next tick), tumble, crash
 and emergency stop.
 """
-from crazyflie_app.firmware.commander import modeAbs, modeDisable, modeVelocity
+from collections.abc import Callable
+
+from crazyflie_app.firmware.commander import modeAbs, modeDisable, modeVelocity, setpoint_t
 
 COMMANDER_WDT_TIMEOUT_STABILIZE = 500  # ms
 COMMANDER_WDT_TIMEOUT_SHUTDOWN = 2000  # ms
@@ -38,8 +40,8 @@ READY_TO_FLY = "READY_TO_FLY"
 SUPERVISOR_STATES = (PRE_FLIGHT, FLYING, WARNING_LEVEL_OUT, LANDED, LOCKED, READY_TO_FLY)
 
 
-class Supervisor(object):
-    def __init__(self, require_arming=True, console=None):
+class Supervisor:
+    def __init__(self, require_arming: bool = True, console: Callable[[str], None] | None = None):
         self.state = PRE_FLIGHT
         self.require_arming = bool(require_arming)
         self.armed = not self.require_arming
@@ -51,11 +53,11 @@ class Supervisor(object):
         self._landed_since = None
 
     @property
-    def watchdog_events(self):
+    def watchdog_events(self) -> list[tuple[int, str]]:
         """Level-outs and locks so far (a healthy flight has none)."""
         return [e for e in self.events if e[1] in (WARNING_LEVEL_OUT, LOCKED)]
 
-    def _print(self, text):
+    def _print(self, text: str) -> None:
         if self._console is not None:
             self._console(text)
 
@@ -84,13 +86,13 @@ class Supervisor(object):
         self._motors_off_since = None
         self._enter(tick, PRE_FLIGHT)
 
-    def supervisor_can_arm(self):
+    def supervisor_can_arm(self) -> bool:
         return self.state == PRE_FLIGHT
 
-    def supervisor_is_armed(self):
+    def supervisor_is_armed(self) -> bool:
         return self.armed
 
-    def supervisor_request_arming(self, do_arm, tick=0):
+    def supervisor_request_arming(self, do_arm: bool, tick: int = 0) -> bool:
         """supervisorRequestArming(doArm): False if arming is asked for where it cannot be (not PRE_FLIGHT)."""
         do_arm = bool(do_arm)
         if do_arm == self.armed:
@@ -101,7 +103,7 @@ class Supervisor(object):
         self.arming_events.append((tick, "armed" if do_arm else "disarmed"))
         return True
 
-    def supervisor_update(self, now, setpoint):
+    def supervisor_update(self, now: int, setpoint: setpoint_t) -> None:
         """One supervisor step at tick ``now`` with the setpoint the commander holds."""
         if self.state == LOCKED:
             return
@@ -148,7 +150,7 @@ class Supervisor(object):
         else:
             self._motors_off_since = None
 
-    def next_event_tick(self, now, setpoint):
+    def next_event_tick(self, now: int, setpoint: setpoint_t) -> int | None:
         """The first tick after ``now`` at which supervisor_update could change state (None if never)."""
         candidates = []
         if self.state in (FLYING, WARNING_LEVEL_OUT):
@@ -163,16 +165,16 @@ class Supervisor(object):
         later = [c for c in candidates if c > now]
         return min(later) if later else None
 
-    def supervisor_can_fly(self):
+    def supervisor_can_fly(self) -> bool:
         return self.state != LOCKED
 
-    def supervisor_are_motors_allowed_to_run(self):
+    def supervisor_are_motors_allowed_to_run(self) -> bool:
         return self.state in (READY_TO_FLY, FLYING, WARNING_LEVEL_OUT, LANDED)
 
-    def motors_running(self, setpoint):
+    def motors_running(self, setpoint: setpoint_t) -> bool:
         return self.state in (FLYING, WARNING_LEVEL_OUT) and not (self.state == FLYING and setpoint.is_null())
 
-    def supervisor_override_setpoint(self, setpoint):
+    def supervisor_override_setpoint(self, setpoint: setpoint_t) -> setpoint_t:
         """The setpoint the controller actually gets: the null one while motors are not allowed to run,
         level-out rewrites x/y/attitude and keeps z."""
         if self.state == PRE_FLIGHT and self.require_arming:

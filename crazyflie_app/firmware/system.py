@@ -5,11 +5,14 @@ app tasks; ``run_until(tick)`` advances the whole system. The stabilizer task (p
 at the 100 Hz position-loop rate and additionally wakes on the exact tick of any watchdog threshold, so
 level-out and lock happen when the firmware would, without stepping Python at 1 kHz.
 """
+from collections.abc import Sequence
+from typing import Any
+
 from crazyflie_app.firmware import freertos
 from crazyflie_app.firmware.commander import Commander
 from crazyflie_app.firmware.logparam import (LOG_FLOAT, LOG_UINT8, PARAM_UINT8, LogParamRegistry, log_add,
                                               log_group, param_add, param_group)
-from crazyflie_app.firmware.mav_model import MavModel
+from crazyflie_app.firmware.mav_model import MavModel, MavModelConfig
 from crazyflie_app.firmware.supervisor import SUPERVISOR_STATES, Supervisor
 from crazyflie_app.firmware.uart2 import Uart2
 
@@ -37,13 +40,13 @@ DECK_PARAM = param_group("deck", [
 ])
 
 
-class _Decks(object):
+class _Decks:
     def __init__(self, decks):
         self.bcFlow2 = 1 if "bcFlow2" in decks else 0
         self.bcLoco = 1 if "bcLoco" in decks else 0
 
 
-class _SupervisorInfo(object):
+class _SupervisorInfo:
     def __init__(self, supervisor):
         self._supervisor = supervisor
 
@@ -52,17 +55,17 @@ class _SupervisorInfo(object):
         return SUPERVISOR_STATES.index(self._supervisor.state)
 
 
-class Console(object):
+class Console:
     """DEBUG_PRINT and eventTrigger: kept lines plus listeners (telemetry taps)."""
 
-    def __init__(self, clock, max_lines=1000):
+    def __init__(self, clock: freertos.Scheduler, max_lines: int = 1000):
         self._clock = clock
         self.lines = []  # (tick, module, text), the newest max_lines
         self._max_lines = max_lines
         self.listeners = []  # callables(tick, module, text)
         self.event_listeners = []  # callables(tick, name, payload dict)
 
-    def debug_print(self, module, text):
+    def debug_print(self, module: str, text: str) -> None:
         tick = self._clock.x_task_get_tick_count()
         self.lines.append((tick, module, text))
         if len(self.lines) > self._max_lines:
@@ -70,17 +73,33 @@ class Console(object):
         for listener in self.listeners:
             listener(tick, module, text)
 
-    def event_trigger(self, name, **payload):
+    def event_trigger(self, name: str, **payload: Any) -> None:
         tick = self._clock.x_task_get_tick_count()
         for listener in self.event_listeners:
             listener(tick, name, payload)
 
 
-class Crazyflie(object):
+class _Forward:
+    """A firmware call of the Crazyflie that one of its services implements, under the same name:
+    ``cf.log_get_float(var_id)`` is ``cf.registry.log_get_float(var_id)``."""
+
+    def __init__(self, service: str):
+        self.service = service
+        self.name = ""
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        self.name = name
+
+    def __get__(self, cf: "Crazyflie", owner: type | None = None) -> Any:
+        return getattr(getattr(cf, self.service), self.name)
+
+
+class Crazyflie:
     """One emulated flight controller. Firmware calls are methods with the firmware's snake_case names."""
 
-    def __init__(self, seed=0, model_config=None, decks=("bcFlow2", "bcLoco"), start=(0.0, 0.0, 0.0),
-                 require_arming=True):
+    def __init__(self, seed: int = 0, model_config: MavModelConfig | None = None,
+                 decks: Sequence[str] = ("bcFlow2", "bcLoco"), start: tuple[float, float, float] = (0.0, 0.0, 0.0),
+                 require_arming: bool = True):
         self.scheduler = freertos.Scheduler()
         self.commander = Commander(self.scheduler)
         self.console = Console(self.scheduler)
@@ -98,76 +117,39 @@ class Crazyflie(object):
         self._motors_on = False
         self.scheduler.x_task_create(self._stabilizer_task(), "STABILIZER", STABILIZER_TASK_PRI)
 
-    # -- FreeRTOS -----------------------------------------------------------------------------------------
+    # -- firmware calls one service implements: FreeRTOS, commander, supervisor, UART2, log/param, console --
 
-    def x_task_get_tick_count(self):
-        return self.scheduler.x_task_get_tick_count()
-
-    def x_task_create(self, generator, name, priority):
-        self.scheduler.x_task_create(generator, name, priority)
-
-    def run_until(self, tick):
-        return self.scheduler.run_until(tick)
-
-    # -- commander ----------------------------------------------------------------------------------------
-
-    def commander_set_setpoint(self, sp, priority):
-        return self.commander.commander_set_setpoint(sp, priority)
-
-    def commander_relax_priority(self):
-        self.commander.commander_relax_priority()
-
-    def commander_get_inactivity_time(self):
-        return self.commander.commander_get_inactivity_time()
+    x_task_get_tick_count = _Forward("scheduler")
+    x_task_create = _Forward("scheduler")
+    run_until = _Forward("scheduler")
+    commander_set_setpoint = _Forward("commander")
+    commander_relax_priority = _Forward("commander")
+    commander_get_inactivity_time = _Forward("commander")
+    supervisor_is_armed = _Forward("supervisor")
+    uart2_init = _Forward("uart2")
+    uart2_get_data_with_timeout = _Forward("uart2")
+    log_get_var_id = _Forward("registry")
+    log_get_float = _Forward("registry")
+    log_get_uint = _Forward("registry")
+    param_get_var_id = _Forward("registry")
+    param_get_uint = _Forward("registry")
+    param_get_float = _Forward("registry")
+    debug_print = _Forward("console")
+    event_trigger = _Forward("console")
 
     # -- supervisor ---------------------------------------------------------------------------------------
 
-    def supervisor_request_arming(self, do_arm):
+    def supervisor_request_arming(self, do_arm: bool) -> bool:
         """supervisorRequestArming(doArm): True when the request was taken (arming needs PRE_FLIGHT)."""
         return self.supervisor.supervisor_request_arming(do_arm, self.x_task_get_tick_count())
 
-    def supervisor_is_armed(self):
-        return self.supervisor.supervisor_is_armed()
-
     # -- UART2 ----------------------------------------------------------------------------------------------
 
-    def attach_uart2(self, url):
+    def attach_uart2(self, url: str) -> Uart2:
         """Plug a serial wire (a pty slave path) into the deck port's UART2 and start its receive task."""
         self.uart2 = Uart2(self.scheduler, url)
         self.scheduler.x_task_create(self.uart2.rx_task(), "UART2_RX", UART2_RX_TASK_PRI)
         return self.uart2
-
-    def uart2_init(self, baudrate):
-        self.uart2.uart2_init(baudrate)
-
-    def uart2_get_data_with_timeout(self, size, timeout_ticks):
-        return self.uart2.uart2_get_data_with_timeout(size, timeout_ticks)
-
-    # -- log / param / console ----------------------------------------------------------------------------
-
-    def log_get_var_id(self, group, name):
-        return self.registry.log_get_var_id(group, name)
-
-    def log_get_float(self, var_id):
-        return self.registry.log_get_float(var_id)
-
-    def log_get_uint(self, var_id):
-        return self.registry.log_get_uint(var_id)
-
-    def param_get_var_id(self, group, name):
-        return self.registry.param_get_var_id(group, name)
-
-    def param_get_uint(self, var_id):
-        return self.registry.param_get_uint(var_id)
-
-    def param_get_float(self, var_id):
-        return self.registry.param_get_float(var_id)
-
-    def debug_print(self, module, text):
-        self.console.debug_print(module, text)
-
-    def event_trigger(self, name, **payload):
-        self.console.event_trigger(name, **payload)
 
     # -- the stabilizer -----------------------------------------------------------------------------------
 

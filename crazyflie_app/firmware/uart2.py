@@ -24,6 +24,8 @@ import os
 import struct
 import termios
 
+from crazyflie_app.firmware.freertos import Scheduler, Task, v_task_delay
+
 RX_BUFFER_BYTES = 200  # uart2.c: xStreamBufferCreate(200, 1)
 DEFAULT_BAUDRATE = 115200
 BITS_PER_BYTE = 10  # 8N1: start + 8 data + stop
@@ -32,10 +34,11 @@ READ_CHUNK = 4096
 REOPEN_MS = 100
 
 
-class Uart2(object):
+class Uart2:
     """The UART2 peripheral and driver of one emulated Crazyflie, wired to ``url`` (a pty slave path)."""
 
-    def __init__(self, clock, url, baudrate=DEFAULT_BAUDRATE, rx_buffer_bytes=RX_BUFFER_BYTES):
+    def __init__(self, clock: Scheduler, url: str, baudrate: int = DEFAULT_BAUDRATE,
+                 rx_buffer_bytes: int = RX_BUFFER_BYTES):
         self._clock = clock
         self.url = url
         self.baudrate = baudrate
@@ -53,10 +56,10 @@ class Uart2(object):
         self.initialized = False
 
     @property
-    def byte_time_ms(self):
+    def byte_time_ms(self) -> float:
         return 1000.0 * BITS_PER_BYTE / self.baudrate
 
-    def uart2_init(self, baudrate):
+    def uart2_init(self, baudrate: int) -> None:
         """uart2Init(baudrate): the app sets the line rate (115200 for the JeVois)."""
         self.baudrate = int(baudrate)
         self.initialized = True
@@ -118,9 +121,8 @@ class Uart2(object):
         self._rx.extend(arrived)
         self.received_bytes += len(arrived)
 
-    def rx_task(self):
+    def rx_task(self) -> Task:
         """The USART2 RX interrupt, as a task: poll the wire, shift bytes in at the line rate."""
-        from crazyflie_app.firmware.freertos import v_task_delay
         while True:
             now = self._clock.x_task_get_tick_count()
             # bytes due by now go in first, so new ones queue behind the line's busy time, not before it
@@ -130,7 +132,7 @@ class Uart2(object):
 
     # -- the app side -----------------------------------------------------------------------------------------
 
-    def uart2_get_data_with_timeout(self, size, timeout_ticks):
+    def uart2_get_data_with_timeout(self, size: int, timeout_ticks: int) -> bytes:
         """Up to ``size`` received bytes (b"" if none, or if ``timeout_ticks`` is 0, as in uart2.c)."""
         if timeout_ticks <= 0 or size <= 0:
             return b""
@@ -139,14 +141,14 @@ class Uart2(object):
         del self._rx[:size]
         return data
 
-    def uart2_did_overrun(self):
+    def uart2_did_overrun(self) -> bool:
         result, self.overrun = self.overrun, False
         return result
 
-    def bytes_waiting(self):
+    def bytes_waiting(self) -> int:
         return len(self._rx)
 
-    def close(self):
+    def close(self) -> None:
         if self._fd is not None:
             try:
                 os.close(self._fd)

@@ -8,11 +8,13 @@ same plan and stops. Temporary files an interrupted deploy left are removed firs
 """
 import os
 import re
+from collections.abc import Collection, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 from host_tools.deploy import card_fs
 from host_tools.deploy.initscript import block_mapping, headless_commands, plan_initscript
+from host_tools.deploy.modes import CameraMode
 from host_tools.deploy.videomappings import plan_videomappings
 from host_tools.errors import ForaNavError
 
@@ -63,7 +65,7 @@ def encode(text: str) -> bytes:
     return text.encode(*TEXT_CODEC)
 
 
-def backup_path(path: str, names) -> str:
+def backup_path(path: str, names: Collection[str]) -> str:
     """`<path>.foranav-bak-<n>`, n one more than the highest backup of `path` already on the card."""
     numbers = [int(m.group("n")) for m in (_BACKUP_RE.match(name) for name in names)
                if m and m.group("path") == path]
@@ -74,7 +76,7 @@ def is_backup(path: str) -> bool:
     return _BACKUP_RE.match(path) is not None
 
 
-def plan_file(state: CardState, path: str, data: bytes, detail=()) -> FileChange:
+def plan_file(state: CardState, path: str, data: bytes, detail: Sequence[str] = ()) -> FileChange:
     old = state.files.get(path)
     if old is None:
         return FileChange(path, "create", data, None, tuple(detail))
@@ -96,7 +98,8 @@ def _initscript_changes(state, vendor, module, mode, headless):
     return [], []
 
 
-def plan_deploy(state: CardState, payload: dict, vendor: str, module: str, mode, headless: bool) -> DeployPlan:
+def plan_deploy(state: CardState, payload: dict, vendor: str, module: str, mode: CameraMode,
+                headless: bool) -> DeployPlan:
     """The changes that install `payload` ({file name: bytes}) as modules/<vendor>/<module>/ and register it.
 
     Pure: `state` is what read_card returned. Module files come first and config files last, so the camera never
@@ -120,7 +123,7 @@ def plan_deploy(state: CardState, payload: dict, vendor: str, module: str, mode,
     return DeployPlan(removals + changes, notes)
 
 
-def check_card(root) -> Path:
+def check_card(root: str | os.PathLike) -> Path:
     """Adapter: refuse a PATH that is not a mounted JEVOIS partition, with one line that says what to give."""
     root = Path(root)
     if not root.is_dir():
@@ -166,7 +169,7 @@ def _module_folders(vendor, module):
     return [MODULES_DIR + "/" + vendor, module_dir(vendor, module)]
 
 
-def read_card(root, vendor: str, module: str) -> CardState:
+def read_card(root: str | os.PathLike, vendor: str, module: str) -> CardState:
     """Adapter: CardState with the bytes of every file the deploy may change and the names already present.
 
     Every path it reads is resolved first: a symlink off the card stops the deploy here, before any write.
@@ -193,7 +196,7 @@ def _parents(path):
     return ["/".join(parts[:i]) for i in range(1, len(parts) + 1)]
 
 
-def check_plan(plan: DeployPlan, entries: dict, force: bool, shown_root) -> None:
+def check_plan(plan: DeployPlan, entries: dict, force: bool, shown_root: str | os.PathLike) -> None:
     """Pure: the plan against what is on the card (`entries`: {card path: card_fs.Entry}, for every path the
     plan writes, its backups and their folders). ForaNavError on the first path that would fail or that the
     user protected; nothing has been written yet."""
@@ -226,7 +229,7 @@ def check_plan(plan: DeployPlan, entries: dict, force: bool, shown_root) -> None
                            % (shown_root, protected[0], more))
 
 
-def inspect_plan(root, plan: DeployPlan) -> dict:
+def inspect_plan(root: str | os.PathLike, plan: DeployPlan) -> dict:
     """Adapter: card_fs.Entry of every path `plan` touches (raises if one leads off the card)."""
     root = card_fs.real_root(root)
     paths = set()
@@ -235,12 +238,12 @@ def inspect_plan(root, plan: DeployPlan) -> dict:
     return {path: card_fs.entry(root, path) for path in sorted(paths)}
 
 
-def preflight(root, plan: DeployPlan, force: bool) -> None:
+def preflight(root: str | os.PathLike, plan: DeployPlan, force: bool) -> None:
     """Adapter: everything the writes need is checked before the first one (see check_plan)."""
     check_plan(plan, inspect_plan(root, plan), force, root)
 
 
-def apply_plan(root, plan: DeployPlan) -> None:
+def apply_plan(root: str | os.PathLike, plan: DeployPlan) -> None:
     """Adapter: remove stray temporary files, back up every file that changes, then write the new contents
     durably, in plan order."""
     shown, root = root, card_fs.real_root(root)
@@ -267,7 +270,7 @@ def apply_plan(root, plan: DeployPlan) -> None:
                            % (shown, len(done), ", ".join(done[-3:]) or "none", err))
 
 
-def describe_plan(plan: DeployPlan, root, dry_run: bool) -> list:
+def describe_plan(plan: DeployPlan, root: str | os.PathLike, dry_run: bool) -> list[str]:
     """The lines `foranav deploy` prints: one per file, what is added to config files, then the notes."""
     verb = {"create": "create", "update": "update", "same": "keep  ", "remove": "remove"}
     lines = ["%s %s:" % ("Would change" if dry_run else "Changed", root)]

@@ -37,7 +37,7 @@ class Entry:
     write_protected: bool = False
 
 
-def real_root(root) -> Path:
+def real_root(root: str | os.PathLike) -> Path:
     return Path(os.path.realpath(str(root)))
 
 

@@ -8,13 +8,14 @@ ones; the output says what was kept). Everything is checked before the first wri
 up first (<file>.foranav-bak-<n>) and written atomically. A write-protected file is left alone unless --force.
 --dry-run prints the plan and writes nothing.
 """
+import argparse
 from pathlib import Path
 
 from host_tools.deploy import card, module_files
-from host_tools.deploy.modes import DEFAULT_MODE_TEXT, format_mode, is_calibrated_size, parse_mode
+from host_tools.deploy.modes import DEFAULT_MODE_TEXT, CameraMode, format_mode, is_calibrated_size, parse_mode
 
 
-def add_arguments(parser):
+def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--sd", required=True, metavar="PATH",
                         help="mount point of the card's JEVOIS partition (it has config/ and modules/)")
     parser.add_argument("--vendor", default=module_files.DEFAULT_VENDOR,
@@ -32,7 +33,7 @@ def add_arguments(parser):
                         help="module folder to install (default: the repository's jevois_module/ForaNavTrees)")
 
 
-def plan_from_args(args):
+def plan_from_args(args: argparse.Namespace) -> tuple[card.DeployPlan, CameraMode, list[str]]:
     """Everything checked and planned, nothing written: (plan, mode, notes)."""
     mode = parse_mode(args.mode)
     vendor = module_files.check_name("vendor", args.vendor)
@@ -53,7 +54,7 @@ def plan_from_args(args):
     return plan, mode, notes
 
 
-def run(args):
+def run(args: argparse.Namespace) -> int:
     plan, mode, notes = plan_from_args(args)
     if not args.dry_run:
         card.apply_plan(args.sd, plan)

@@ -4,6 +4,7 @@ Copy the file to JEVOIS:/packages/ and reboot the camera: it unpacks modules/<Ve
 files, models, script.cfg, params.cfg) and runs the package's postinstall once, which adds the USB-video and NONE
 (headless) video mappings if they are missing. The same command gives the same bytes.
 """
+import argparse
 from pathlib import Path
 
 from host_tools import fileio
@@ -14,7 +15,7 @@ from host_tools.errors import ForaNavError
 PACKAGE_FILE_MODE = 0o644
 
 
-def add_arguments(parser):
+def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", required=True, metavar="FILE.jvpkg",
                         help="package file to write (JeVois only installs names ending in .jvpkg; "
                              "convention: ForaNav-ForaNavTrees.jvpkg)")
@@ -26,7 +27,7 @@ def add_arguments(parser):
                         help="module folder to package (default: the repository's jevois_module/ForaNavTrees)")
 
 
-def run(args):
+def run(args: argparse.Namespace) -> int:
     out = Path(args.out)
     if out.suffix != package.PACKAGE_SUFFIX:
         raise ForaNavError("--out %s: the camera only unpacks files ending in %s" % (out, package.PACKAGE_SUFFIX))

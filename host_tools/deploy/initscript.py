@@ -14,9 +14,10 @@ Only one mapping can stream, and `setmapping2` fails while another one streams, 
 `setmapping`/`setmapping2`/`streamon` line outside the block is turned into a comment that keeps its text
 (`#foranav-off# setmapping2 ...`); remove the prefix to restore it. Every other line of the user's stays as it was.
 """
-import collections
+from collections.abc import Sequence
+from dataclasses import dataclass
 
-from host_tools.deploy.modes import camera_fields
+from host_tools.deploy.modes import CameraMode, camera_fields
 from host_tools.deploy.videomappings import append_lines, newline_of
 from host_tools.errors import ForaNavError
 
@@ -29,22 +30,25 @@ CONFLICTING_COMMANDS = ("setmapping", "setmapping2", "streamon")
 SERIAL_ROUTING = ("serout", "serlog")
 NEW_FILE_HEADER = "# JeVois initialization script: console commands run at boot (headless set-up by ForaNav)"
 
-InitscriptPlan = collections.namedtuple("InitscriptPlan", "text notes")
+@dataclass(frozen=True)
+class InitscriptPlan:
+    text: str  # the new file
+    notes: list  # what the user should know
 
 
-def headless_commands(vendor, module, mode):
+def headless_commands(vendor: str, module: str, mode: CameraMode) -> list[str]:
     return ["setmapping2 %s %s %s" % (camera_fields(mode), vendor, module),
             "setpar serlog None",
             "setpar serout Hard",
             "streamon"]
 
 
-def _command_words(line):
+def _command_words(line: str) -> list[str]:
     stripped = line.strip()
     return [] if not stripped or stripped.startswith("#") else stripped.split()
 
 
-def find_block(lines):
+def find_block(lines: Sequence[str]) -> tuple[int, int] | None:
     """(begin, end) indices of the managed block's marker lines, or None; ForaNavError if it is broken."""
     begins = [i for i, line in enumerate(lines) if line.strip() == BLOCK_BEGIN]
     ends = [i for i, line in enumerate(lines) if line.strip() == BLOCK_END]
@@ -56,7 +60,7 @@ def find_block(lines):
     return begins[0], ends[0]
 
 
-def block_mapping(text):
+def block_mapping(text: str) -> str | None:
     """The `setmapping2 ...` command inside the managed block, or None (for reports on a non-headless deploy)."""
     lines = (text or "").splitlines()
     span = find_block(lines)
@@ -68,7 +72,7 @@ def block_mapping(text):
     return None
 
 
-def _disable_conflicts(lines, span):
+def _disable_conflicts(lines: list[str], span: tuple[int, int]) -> list[str]:
     """Comment out other modules' boot commands in place (lines keep their own endings)."""
     notes = []
     for i, line in enumerate(lines):
@@ -82,7 +86,7 @@ def _disable_conflicts(lines, span):
     return notes
 
 
-def _warn_late_serial_routing(lines, block_end):
+def _warn_late_serial_routing(lines: Sequence[str], block_end: int) -> list[str]:
     notes = []
     for i in range(block_end + 1, len(lines)):
         words = _command_words(lines[i])
@@ -93,7 +97,7 @@ def _warn_late_serial_routing(lines, block_end):
     return notes
 
 
-def plan_initscript(text, vendor, module, mode):
+def plan_initscript(text: str | None, vendor: str, module: str, mode: CameraMode) -> InitscriptPlan:
     """New initscript text that boots the module headless (text None = no file yet). Idempotent.
 
     The block belongs to ForaNav and is rewritten whole (a new --mode replaces the old mapping); put your own

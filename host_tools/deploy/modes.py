@@ -1,9 +1,9 @@
 """Camera modes for the ForaNav module: parsing `WxH@FPS`, checking them against the JeVois-A33 sensor, and the
 numbers that follow from a mode (fps text as JeVois writes it, a per-frame serial line budget).
 """
-import collections
 import math
 import re
+from typing import NamedTuple
 
 from host_tools.errors import ForaNavError
 
@@ -28,12 +28,16 @@ SERIAL_HEADROOM = 0.8
 LONGEST_T2_LINE_BYTES = len("T2 -1000 -750\r\n")
 MIN_LINES_PER_FRAME = 2  # one tree and the end-of-frame mark, whatever the rate
 
-CameraMode = collections.namedtuple("CameraMode", "width height fps")
+class CameraMode(NamedTuple):
+    """A camera sensor mode; a tuple (width, height, fps) too."""
+    width: int
+    height: int
+    fps: float
 
 _MODE_RE = re.compile(r"^\s*(\d+)\s*[xX]\s*(\d+)\s*@\s*(\d+(?:\.\d*)?|\.\d+)\s*$")
 
 
-def parse_mode(text):
+def parse_mode(text: str) -> CameraMode:
     """'352x288@15' -> CameraMode(352, 288, 15.0); ForaNavError naming the problem otherwise."""
     match = _MODE_RE.match(text or "")
     if not match:
@@ -51,26 +55,26 @@ def parse_mode(text):
     return CameraMode(width, height, round(fps, 2))
 
 
-def format_fps(fps):
+def format_fps(fps: float) -> str:
     """JeVois style: at least one decimal, at most two ('15.0', '26.1', '26.15')."""
     text = "%.2f" % fps
     return text[:-1] if text.endswith("0") else text
 
 
-def format_mode(mode):
+def format_mode(mode: CameraMode) -> str:
     return "%dx%d@%s" % (mode.width, mode.height, format_fps(mode.fps))
 
 
-def camera_fields(mode):
+def camera_fields(mode: CameraMode) -> str:
     """The camera half of a mapping, as JeVois writes it: 'YUYV 352 288 15.0'."""
     return "%s %d %d %s" % (CAMERA_FORMAT, mode.width, mode.height, format_fps(mode.fps))
 
 
-def is_calibrated_size(mode):
+def is_calibrated_size(mode: CameraMode) -> bool:
     return (mode.width, mode.height) == CALIBRATED_SIZE
 
 
-def serial_lines_per_frame(fps, baud=SERIAL_BAUD):
+def serial_lines_per_frame(fps: float, baud: int = SERIAL_BAUD) -> int:
     """How many of the longest T2 lines fit through the serial port per frame, with head-room (for `serlimit`)."""
     bytes_per_frame = baud / BITS_PER_BYTE_8N1 / fps * SERIAL_HEADROOM
     return max(MIN_LINES_PER_FRAME, int(math.floor(bytes_per_frame / LONGEST_T2_LINE_BYTES)))

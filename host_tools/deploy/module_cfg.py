@@ -20,9 +20,10 @@ Comment lines are regenerated; the user's own comments stay in the numbered back
 """
 import hashlib
 import re
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
-from host_tools.deploy.modes import format_fps, format_mode, serial_lines_per_frame
+from host_tools.deploy.modes import CameraMode, format_fps, format_mode, serial_lines_per_frame
 from host_tools.errors import ForaNavError
 
 FORANAV_LINE_MARK = "# ForaNav's line [%s]: recomputed by foranav deploy until you change the line below"
@@ -61,7 +62,7 @@ class MergedFile:
     notes: list = field(default_factory=list)
 
 
-def cfg_value(value) -> str:
+def cfg_value(value: object) -> str:
     if isinstance(value, bool):
         return "true" if value else "false"
     return str(value)
@@ -107,7 +108,8 @@ def _is_legacy_script_line(previous: str, line: str, text: str) -> bool:
     return serlimit or " ".join(words) in LEGACY_SCRIPT_LINES
 
 
-def user_lines(text: str | None, key_of, legacy_ours) -> list:
+def user_lines(text: str | None, key_of: Callable[[str], str | None],
+               legacy_ours: Callable[[str, str, str | None], bool]) -> list[CardLine]:
     """The active lines on the card that are not ForaNav's, in file order."""
     lines = (text or "").splitlines()
     found = []
@@ -122,7 +124,7 @@ def user_lines(text: str | None, key_of, legacy_ours) -> list:
     return found
 
 
-def mentioned_keys(text: str | None, key_of) -> set:
+def mentioned_keys(text: str | None, key_of: Callable[[str], str | None]) -> set[str]:
     """Settings the file names, active or commented out (to tell which settings of a new release are new)."""
     keys = set()
     for raw in (text or "").splitlines():
@@ -161,7 +163,7 @@ def _last_per_key(lines) -> dict:
 # ---------------------------------------------------------------------------------------------------------------
 # params.cfg
 
-def params_settings(parameters, forced: dict) -> list:
+def params_settings(parameters: Sequence, forced: dict) -> list:
     """One Setting per module parameter; `forced` ({name: (value, why)}) become active ForaNav lines."""
     settings = []
     for parameter in parameters:
@@ -188,8 +190,8 @@ def card_params_lines(text: str | None) -> list:
     return user_lines(text, params_key, _is_legacy_params_line)
 
 
-def merge_params(vendor: str, module_name: str, parameters, forced: dict, card_text: str | None, refusals: dict,
-                 force: bool, label: str, budget: int | None = None) -> MergedFile:
+def merge_params(vendor: str, module_name: str, parameters: Sequence, forced: dict, card_text: str | None,
+                 refusals: dict, force: bool, label: str, budget: int | None = None) -> MergedFile:
     """params.cfg text for the new module with the user's settings from `card_text` (None: no file yet).
 
     `refusals` ({(name, value): reason}) is what the module said about the user's values; `label` names the
@@ -241,7 +243,7 @@ def merge_params(vendor: str, module_name: str, parameters, forced: dict, card_t
     return MergedFile("\n".join(lines) + "\n", notes)
 
 
-def serial_overrides(parameters, mode, own: dict | None = None) -> dict:
+def serial_overrides(parameters: Sequence, mode: CameraMode, own: dict | None = None) -> dict:
     """{parameter: (value, why)} ForaNav sets: the module folder's own params.cfg values (`own`, {name: value
     text}), and per-frame trees capped to what the serial port carries, so the end-of-frame mark is never the
     line `serlimit` drops."""
@@ -264,7 +266,7 @@ def serial_overrides(parameters, mode, own: dict | None = None) -> dict:
 # ---------------------------------------------------------------------------------------------------------------
 # script.cfg
 
-def script_settings(mode, own_lines=()) -> tuple:
+def script_settings(mode: CameraMode, own_lines: Sequence[str] = ()) -> tuple:
     """(header lines, settings) of script.cfg; `own_lines` (the module folder's own script.cfg commands) are
     ForaNav's too and replace a template line with the same setting."""
     header = [
@@ -305,7 +307,7 @@ def command_lines(text: str | None) -> list:
     return [line.strip() for line in (text or "").splitlines() if line.strip() and not line.strip().startswith("#")]
 
 
-def merge_script(mode, own_lines, card_text: str | None, label: str) -> MergedFile:
+def merge_script(mode: CameraMode, own_lines: Sequence[str], card_text: str | None, label: str) -> MergedFile:
     """script.cfg text for `mode` with the user's commands from `card_text` (None: no file yet)."""
     header, settings = script_settings(mode, own_lines)
     mine = card_script_lines(card_text)

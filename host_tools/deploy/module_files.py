@@ -7,6 +7,7 @@ commands). The host-only `__init__.py`, caches and tests stay behind. The module
 loading it as the camera would (module_probe), never by reading its source.
 """
 import ast
+import os
 import io
 import re
 import zipfile
@@ -16,7 +17,7 @@ from pathlib import Path
 import jevois_module
 
 from host_tools.deploy import module_cfg
-from host_tools.deploy.modes import serial_lines_per_frame
+from host_tools.deploy.modes import CameraMode, serial_lines_per_frame
 from host_tools.deploy.module_probe import probe_module
 from host_tools.errors import ForaNavError
 
@@ -39,14 +40,14 @@ class ModulePayload:
     notes: list  # lines for the user
 
 
-def check_name(kind, name):
+def check_name(kind: str, name: str) -> str:
     if not NAME_RE.match(name or ""):
         raise ForaNavError("%s %r: must start with an uppercase letter and use only letters, digits and _ "
                            "(JeVois Inventor's rule; it is also a folder name on the card)" % (kind, name))
     return name
 
 
-def is_deployed_file(name):
+def is_deployed_file(name: str) -> bool:
     """Whether a file of the module folder goes to the camera (top level only; folders never do)."""
     if name.startswith(".") or name in HOST_ONLY_NAMES or name in GENERATED_NAMES:
         return False
@@ -55,7 +56,7 @@ def is_deployed_file(name):
     return name.endswith(DEPLOYED_SUFFIXES)
 
 
-def read_module_folder(folder):
+def read_module_folder(folder: str | os.PathLike) -> dict[str, bytes]:
     """Adapter: {file name: bytes} of the files in `folder` that the camera needs, plus the folder's own
     script.cfg/params.cfg if it has them (they are merged into the generated ones)."""
     folder = Path(folder)
@@ -94,7 +95,8 @@ def _check_model_file(name, data):
         raise ForaNavError("model file %s: not a .npz archive (a Git LFS pointer or a damaged copy?)" % name)
 
 
-def validate_module(files, module_name=MODULE_NAME, default_model=DEFAULT_MODEL):
+def validate_module(files: dict[str, bytes], module_name: str = MODULE_NAME,
+                    default_model: str = DEFAULT_MODEL) -> tuple[dict[str, ast.Module], list[str]]:
     """Refuse a module that would not load on the camera; returns (parsed trees {name: ast.Module}, notes).
 
     Refused: no `<Module>.py` or no `class <Module>` in it; a .py that is not Python 3.7; a missing default model;
@@ -143,7 +145,7 @@ def _check_own_params(own, probe):
                                % (name, value, probe.refusals[(name, value)]))
 
 
-def build_module_payload(files: dict, vendor: str, mode, module_name: str = MODULE_NAME,
+def build_module_payload(files: dict, vendor: str, mode: CameraMode, module_name: str = MODULE_NAME,
                          default_model: str = DEFAULT_MODEL, card_files: dict | None = None, force: bool = False,
                          card_label: str | None = None) -> ModulePayload:
     """ModulePayload for modules/<Vendor>/<Module>/ on the card: the validated module files plus script.cfg and
@@ -177,6 +179,6 @@ def build_module_payload(files: dict, vendor: str, mode, module_name: str = MODU
     return ModulePayload(dict(sorted(payload.items())), notes + params.notes + script.notes)
 
 
-def default_module_folder():
+def default_module_folder() -> Path:
     """The repository's camera module folder (jevois_module/ForaNavTrees)."""
     return Path(jevois_module.__file__).resolve().parent / MODULE_NAME

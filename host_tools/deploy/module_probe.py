@@ -19,6 +19,7 @@ import subprocess
 import sys
 import tempfile
 import traceback
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -46,7 +47,7 @@ class ModuleProbe:
     parameters: tuple  # ModuleParameter, in creation order
     refusals: dict  # {(name, value): the module's reason} for the settings asked about that it refuses
 
-    def parameter(self, name):
+    def parameter(self, name: str) -> "ModuleParameter | None":
         return next((p for p in self.parameters if p.name == name), None)
 
 
@@ -66,7 +67,7 @@ def _child_env():
     return env
 
 
-def probe_module(files: dict, module_name: str, checks=()) -> ModuleProbe:
+def probe_module(files: dict, module_name: str, checks: Sequence = ()) -> ModuleProbe:
     """Load the module made of `files` ({file name: bytes}) and report its parameters and which of `checks`
     ([(name, value text)]) it refuses. ForaNavError (naming the module file) when it does not load."""
     checks = [tuple(check) for check in checks]
@@ -161,7 +162,7 @@ def _describe(folder, checks):
     return {"parameters": described, "refusals": refusals}
 
 
-def main():
+def main() -> int:
     request = json.loads(sys.stdin.read())
     libjevois.Parameter = _with_callbacks(libjevois)  # this process only: it exits after one module
     answer_stream = sys.stdout

@@ -13,7 +13,7 @@ import io
 import tarfile
 
 from host_tools.deploy.card import module_dir
-from host_tools.deploy.modes import CAMERA_FORMAT, format_fps
+from host_tools.deploy.modes import CAMERA_FORMAT, CameraMode, format_fps
 from host_tools.deploy.videomappings import (SAME_FPS_TOLERANCE, USB_FPS_STEP, header_comment, headless_line)
 
 PACKAGE_SUFFIX = ".jvpkg"
@@ -106,7 +106,7 @@ exit 0
 """
 
 
-def postinstall_script(vendor, module, mode):
+def postinstall_script(vendor: str, module: str, mode: CameraMode) -> str:
     """The shell text of the package's postinstall (POSIX sh + awk, as on the camera's busybox)."""
     return _POSTINSTALL_TEMPLATE.format(
         vendor=vendor, module=module, cam_format=CAMERA_FORMAT, width=mode.width, height=mode.height,
@@ -114,7 +114,8 @@ def postinstall_script(vendor, module, mode):
         header=header_comment(vendor, module), headless=headless_line(vendor, module, mode))
 
 
-def package_members(payload, vendor, module, mode):
+def package_members(payload: dict[str, bytes], vendor: str, module: str,
+                    mode: CameraMode) -> dict[str, tuple[bytes, int]]:
     """{member path: (bytes, mode)}: the module files, then the postinstall, under modules/<Vendor>/<Module>/."""
     folder = module_dir(vendor, module)
     members = {folder + "/" + name: (data, FILE_MODE) for name, data in payload.items()}
@@ -138,7 +139,7 @@ def _tarinfo(name, kind, mode, size=0):
     return info
 
 
-def build_jvpkg(members):
+def build_jvpkg(members: dict[str, tuple[bytes, int]]) -> bytes:
     """bzip2 tar bytes of `members` ({path: (bytes, mode)}), folders first, everything sorted, fixed metadata."""
     raw = io.BytesIO()
     with tarfile.open(fileobj=raw, mode="w", format=tarfile.USTAR_FORMAT) as tar:
@@ -150,6 +151,6 @@ def build_jvpkg(members):
     return bz2.compress(raw.getvalue(), BZIP2_LEVEL)
 
 
-def package_file_name(vendor, module):
+def package_file_name(vendor: str, module: str) -> str:
     """The 2024 jevois-jvpkg naming: <Vendor>-<Module>.jvpkg."""
     return "%s-%s%s" % (vendor, module, PACKAGE_SUFFIX)

@@ -11,13 +11,18 @@ mode's fps should then be lowered to just below what the module's Timer reports 
 The summary is a pure function of (time, line) pairs; only `listen` touches the port (pyserial, read-only: it
 sends nothing, since the camera runs every received line as a console command).
 """
-import collections
+import argparse
 import math
 import sys
 import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import serial
 
 from host_tools import argtypes
-from host_tools.deploy.modes import DEFAULT_MODE_TEXT, format_fps, parse_mode
+from host_tools.cli import main
+from host_tools.deploy.modes import DEFAULT_MODE_TEXT, CameraMode, format_fps, parse_mode
 from host_tools.errors import ForaNavError
 from jevois_module.ForaNavTrees.foranav_serial import FRAME_STOP, FrameMark, LineAssembler, parse_line
 
@@ -30,10 +35,17 @@ KEEPS_UP_SHARE = 0.95
 RATE_MARGIN = 0.97
 END_OF_FRAME = FRAME_STOP.split()[1]  # FrameMark.what of "MARK STOP"
 
-LinkSummary = collections.namedtuple("LinkSummary", "seconds lines detections frames other frame_rate")
+@dataclass(frozen=True)
+class LinkSummary:
+    seconds: float  # of listening
+    lines: int
+    detections: int  # T2/N2 lines
+    frames: int  # MARK STOP lines
+    other: int  # lines that are neither
+    frame_rate: float | None  # frames per second from the MARK STOP times; None with fewer than two marks
 
 
-def summarize(events, seconds):
+def summarize(events: Sequence[tuple[float, bytes]], seconds: float) -> LinkSummary:
     """events: [(t_s, line)] received in `seconds` of listening -> LinkSummary.
 
     frame_rate comes from the MARK STOP times (frames - 1 intervals), None with fewer than two marks.
@@ -56,12 +68,12 @@ def summarize(events, seconds):
     return LinkSummary(seconds, len(events), detections, frames, other, rate)
 
 
-def suggested_fps(measured_rate):
+def suggested_fps(measured_rate: float) -> float:
     """A camera fps just below a measured processing rate, to 0.1 fps."""
     return max(0.1, math.floor(measured_rate * RATE_MARGIN * 10) / 10)
 
 
-def verdict(summary, mode):
+def verdict(summary: LinkSummary, mode: CameraMode) -> list[str]:
     """Lines for the user: what arrived, and whether the module keeps up with the mode's fps."""
     lines = ["%d lines in %.1f s: %d detections, %d frames, %d other lines"
              % (summary.lines, summary.seconds, summary.detections, summary.frames, summary.other)]
@@ -84,9 +96,9 @@ def verdict(summary, mode):
     return lines
 
 
-def listen(port_url, seconds, baudrate=115200, clock=time.monotonic):
+def listen(port_url: str, seconds: float, baudrate: int = 115200,
+           clock: Callable[[], float] = time.monotonic) -> list[tuple[float, bytes]]:
     """Adapter: [(t_s, line bytes)] read from the port for `seconds` (t_s from the start)."""
-    import serial
     events = []
     assembler = LineAssembler()
     port = serial.serial_for_url(port_url, baudrate=baudrate, timeout=READ_TIMEOUT_S)
@@ -101,14 +113,14 @@ def listen(port_url, seconds, baudrate=115200, clock=time.monotonic):
     return events
 
 
-def add_arguments(parser):
+def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("port", help="serial port of the USB-serial adapter (e.g. /dev/ttyUSB0, COM3)")
     parser.add_argument("--seconds", type=argtypes.float_range(0.1, MAX_SECONDS), default=DEFAULT_SECONDS,
                         help="how long to listen, 0.1-%g s (default %g)" % (MAX_SECONDS, DEFAULT_SECONDS))
     parser.add_argument("--mode", default=DEFAULT_MODE_TEXT, help="the deployed mode (default %(default)s)")
 
 
-def run(args):
+def run(args: argparse.Namespace) -> int:
     """Listen, then print the verdict; ForaNavError for a bad mode or a port that cannot be opened."""
     mode = parse_mode(args.mode)
     try:
@@ -121,5 +133,4 @@ def run(args):
 
 
 if __name__ == "__main__":
-    from host_tools.cli import main
     sys.exit(main(["serial-check"] + sys.argv[1:]))

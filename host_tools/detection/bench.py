@@ -6,10 +6,13 @@ the camera's lens does): median and p90 milliseconds per frame and frames per se
 implementation of the same pipeline timed on the same frame(s), their ratio, and the peak resident memory.
 The process is pinned to one CPU and OpenCV/BLAS are limited to one thread.
 """
+import argparse
 import json
 import os
 import resource
 import time
+from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -24,7 +27,7 @@ REFERENCE_FRAMES = 1  # the per-window path takes about a second per frame
 CROWNS_AT_352 = (77, 115)  # crown diameters in pixels at 352 px width and 1.25 m altitude
 
 
-def pin_to_one_core():
+def pin_to_one_core() -> set[int] | None:
     """Pin this process to one CPU; returns the previous CPU set (None if pinning is not possible)."""
     try:
         previous = os.sched_getaffinity(0)
@@ -34,13 +37,13 @@ def pin_to_one_core():
         return None
 
 
-def frames_for(width, height, seed, count=4):
+def frames_for(width: int, height: int, seed: int, count: int = 4) -> list[np.ndarray]:
     scale = width / 352.0
     diameters = (CROWNS_AT_352[0] * scale, CROWNS_AT_352[1] * scale)
     return [synthetic.scene(seed + i, width, height, palms=2, roofs=1, diameter=diameters)[0] for i in range(count)]
 
 
-def time_fast(detector, frames, count):
+def time_fast(detector: Any, frames: Sequence[np.ndarray], count: int) -> np.ndarray:
     for frame in frames:
         detector.detect(frame)  # warm-up: plans and buffers for this frame size
     times = []
@@ -52,7 +55,7 @@ def time_fast(detector, frames, count):
     return np.array(times) * 1000.0
 
 
-def time_reference(detector, frames, count):
+def time_reference(detector: Any, frames: Sequence[np.ndarray], count: int) -> np.ndarray:
     times = []
     for i in range(count):
         start = time.perf_counter()
@@ -61,7 +64,8 @@ def time_reference(detector, frames, count):
     return np.array(times) * 1000.0
 
 
-def measure(seed=0, model_name="oil_palm", sizes=SIZES, fast_frames=None, reference_frames=REFERENCE_FRAMES):
+def measure(seed: int = 0, model_name: str = "oil_palm", sizes: Sequence[tuple[int, int]] = SIZES,
+            fast_frames: int | None = None, reference_frames: int = REFERENCE_FRAMES) -> dict:
     previous = pin_to_one_core()
     try:
         return _measure(seed, model_name, sizes, fast_frames, reference_frames, previous is not None)
@@ -91,7 +95,7 @@ def _measure(seed, model_name, sizes, fast_frames, reference_frames, pinned):
             "model": common.model_path(model_name)}
 
 
-def run(args):
+def run(args: argparse.Namespace) -> int:
     result = measure(seed=args.seed)
     if getattr(args, "json", False):
         print(json.dumps(result))

@@ -1,11 +1,17 @@
 """Threshold calibration of a trained model (steps 4-5 of host_tools.detection.training): per domain the SVM,
 colour and variance thresholds together on crop-protocol windows of held-back frames; the frame-edge test
 and the window/crown ratios on whole held-back frames."""
+from collections.abc import Callable, Sequence
+
 import numpy as np
 
 from host_tools.detection import evaluation
+from host_tools.detection.dataset import Frame
 
 import foranav_detector as detector_core
+from foranav_model import TreeModel
+
+Log = Callable[[str], None]  # where progress lines go
 
 CALIBRATION_CROPS = 200  # of each class
 MIN_RECALL = 0.97  # calibrated crop recall at least this (paper: 96.06 %)
@@ -17,7 +23,8 @@ CROWN_RATIO_CENTRES = (0.9, 1.0, 1.1, 1.2, 1.3, 1.4, 1.5)  # window / crown, sea
 CROWN_RATIO_SPREAD = (0.85, 1.0, 1.18)  # three window sizes around each centre (crowns vary in a frame)
 
 
-def calibrate(model, domain_index, frames, rng, log):
+def calibrate(model: TreeModel, domain_index: int, frames: Sequence[Frame], rng: np.random.RandomState,
+              log: Log) -> None:
     """Choose one imagery's SVM, colour and variance thresholds on the crop-protocol windows of its held-back
     frames: the best balanced accuracy among the settings whose recall is at least MIN_RECALL (the paper's
     figure plus a margin); the SVM threshold is searched near 0 only, the colour and variance thresholds
@@ -58,7 +65,7 @@ def calibrate(model, domain_index, frames, rng, log):
            domain.variance_threshold, ", second stage %.2f" % domain.second_threshold if has_second else ""))
 
 
-def calibrate_edge(model, imagery_frames, log):
+def calibrate_edge(model: TreeModel, imagery_frames: Sequence[tuple[str, Sequence[Frame]]], log: Log) -> None:
     """Choose the frame-edge test (detector_core.DetectorSettings.edge_threshold) on whole held-back frames
     of the camera imageries [(name, frames)]: the best detection F1, ties to the more permissive value.
     Crops cannot tell it: it is about where a window sits in the frame. Off is a candidate too, stored as
@@ -78,7 +85,7 @@ def calibrate_edge(model, imagery_frames, log):
         % (n_frames, model.edge_threshold, result["precision"], result["recall"], result["f1"]))
 
 
-def calibrate_frames(model, imagery_frames, log):
+def calibrate_frames(model: TreeModel, imagery_frames: Sequence[tuple[str, Sequence[Frame]]], log: Log) -> None:
     """Whole-frame calibration on the held-back survey frames [(name, frames)]: the window/crown ratios
     (shared) and each imagery's SVM threshold (the crop protocol's value or one of SVM_THRESHOLDS). Each
     frame is scanned at its own typical crown size (as a user's --crown-px) and scored inside its annotated
@@ -134,11 +141,11 @@ def _thresholds_text(thresholds):
     return "%.2f" % svm if second is None else "%.2f/%.2f" % (svm, second)
 
 
-def _f1(hits, false_alarms, misses):
+def _f1(hits: int, false_alarms: int, misses: int) -> float:
     return 2.0 * hits / (2 * hits + false_alarms + misses) if hits else 0.0
 
 
-def below_quantile(values, quantile):
+def below_quantile(values: Sequence[float], quantile: float) -> float:
     """A threshold just below the given quantile of the values (0 -> just below the smallest)."""
     values = np.sort(values)
     index = int(np.floor(quantile * len(values)))

@@ -9,6 +9,7 @@ the frame width (right for flight-camera frames only: a warning says so for othe
 gives the window sizes directly. --domain NAME picks the model's imagery (colour model and thresholds);
 default: the only one, or the one whose colours are nearest each image's.
 """
+import argparse
 import json
 import math
 import sys
@@ -24,7 +25,7 @@ import foranav_model
 CAMERA_SIZES = {(88, 72), (160, 120), (176, 144), (320, 240), (352, 288), (640, 480), (1280, 1024)}
 
 
-def add_arguments(parser):
+def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("images", nargs="+", metavar="IMAGE", help="image files (any format OpenCV reads)")
     parser.add_argument("--model", default="oil_palm",
                         help="model file, or a shipped species: oil_palm (default), citrus, olive")
@@ -43,7 +44,7 @@ def add_arguments(parser):
     parser.add_argument("--json", action="store_true", help="one JSON object per image")
 
 
-def crown_pixels(args):
+def crown_pixels(args: argparse.Namespace) -> float | str | None:
     """The crown diameter in pixels from --crown-px or --gsd/--crown-m (None when no scale is given)."""
     if (args.gsd is None) != (args.crown_m is None):
         raise ForaNavError("--gsd and --crown-m go together (crown pixels = crown metres / metres per pixel)")
@@ -59,7 +60,7 @@ def crown_pixels(args):
     return args.crown_px
 
 
-def settings_for(args, model, crown_px):
+def settings_for(args: argparse.Namespace, model: foranav_model.TreeModel, crown_px: float | None) -> dict:
     if args.window and crown_px is not None:
         raise ForaNavError("give --window or a crown size (--crown-px, --gsd/--crown-m), not both")
     if args.window and not all(math.isfinite(w) and w >= 24 for w in args.window):
@@ -79,7 +80,7 @@ def settings_for(args, model, crown_px):
         raise ForaNavError(str(err))
 
 
-def run(args):
+def run(args: argparse.Namespace) -> int:
     single_threaded()
     model = common.load(args.model)
     crown_px = crown_pixels(args)

@@ -11,6 +11,7 @@ Crop level: the paper's protocol on crops CSVs (image,class,category; written by
 --crops positive and negative crops cut from the frames (seeded). Paper figures for oil palm: accuracy
 92.91 %, precision 90.37 %, recall 96.06 %.
 """
+import argparse
 import json
 import math
 
@@ -18,6 +19,7 @@ from host_tools import fileio
 from host_tools.detection import common, dataset, evaluation
 from host_tools.detection.threads import single_threaded
 from host_tools.errors import ForaNavError
+from host_tools.plotting import plt
 
 import foranav_detector as detector_core
 import foranav_model
@@ -25,7 +27,7 @@ import foranav_model
 PAPER = {"accuracy": 0.9291, "precision": 0.9037, "recall": 0.9606}
 
 
-def add_arguments(parser):
+def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--model", required=True, help="model file, or a shipped species (oil_palm, citrus, olive)")
     parser.add_argument("--data", nargs="+", action="extend", default=[], metavar="CSV",
                         help="boxes CSVs and/or crops CSVs (repeat or list several)")
@@ -43,7 +45,7 @@ def add_arguments(parser):
     parser.add_argument("--json", action="store_true", help="print one JSON object")
 
 
-def crown_scale(args):
+def crown_scale(args: argparse.Namespace) -> float | None:
     if (args.gsd is None) != (args.crown_m is None):
         raise ForaNavError("--gsd and --crown-m go together")
     if args.gsd is not None:
@@ -63,7 +65,7 @@ def crown_scale(args):
     return value
 
 
-def run(args):
+def run(args: argparse.Namespace) -> int:
     single_threaded()
     model = common.load(args.model)
     crown_px = crown_scale(args)
@@ -133,9 +135,6 @@ def _public(result):
 
 
 def _plot(per_imagery, path):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     figure, axis = plt.subplots(figsize=(5.5, 4.5))
     for name, result in per_imagery.items():
         curve = evaluation.precision_recall_curve(result["scored"], result["n_trees"])

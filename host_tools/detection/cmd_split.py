@@ -5,7 +5,9 @@ writes OUT/train/<source>/boxes.csv and OUT/test/<source>/boxes.csv (<source>: t
 image paths point back to the original images (nothing is copied). Every image of a source goes to one side
 only; a source of n >= 2 images holds back at least one. Images listed with no boxes stay with their source.
 """
+import argparse
 import os
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -14,7 +16,7 @@ from host_tools import annotations, argtypes, fileio
 from host_tools.errors import ForaNavError
 
 
-def add_arguments(parser):
+def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--data", nargs="+", action="extend", default=[], required=True, metavar="CSV",
                         help="boxes CSVs (one source each; repeat or list several)")
     parser.add_argument("--held-out", type=argtypes.float_range(0.0, 1.0), default=0.25, metavar="FRACTION",
@@ -23,7 +25,8 @@ def add_arguments(parser):
     parser.add_argument("--out", required=True, metavar="DIR", help="folder for train/ and test/")
 
 
-def split_images(images, held_out, rng):
+def split_images(images: Sequence[str], held_out: float,
+                 rng: np.random.RandomState) -> tuple[list[str], list[str]]:
     """(train images, test images) of one source, each in the source's order."""
     order = rng.permutation(len(images))
     count = int(round(held_out * len(images)))
@@ -33,7 +36,7 @@ def split_images(images, held_out, rng):
     return ([im for i, im in enumerate(images) if i not in test], [im for i, im in enumerate(images) if i in test])
 
 
-def run(args):
+def run(args: argparse.Namespace) -> int:
     if not 0.0 < args.held_out < 1.0:
         raise ForaNavError("--held-out must be between 0 and 1")
     fileio.check_output_dir(args.out, "--out")

@@ -10,6 +10,7 @@ negatives at its own crown scale, only inside each image's annotated area. A tra
 and PNGs: the share of positives and look-alikes passing each cue, per imagery, with warnings) goes next
 to the model (--report). Same data and seed, same model file.
 """
+import argparse
 import os
 from pathlib import Path
 
@@ -22,7 +23,7 @@ import foranav_features as features
 import foranav_model
 
 
-def add_arguments(parser):
+def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--species", required=True, help="label of the target trees in the CSVs, e.g. oil_palm")
     parser.add_argument("--data", nargs="+", action="extend", default=[], metavar="CSV",
                         help="boxes CSVs (one imagery each; repeat or list several), optionally crops CSVs "
@@ -49,7 +50,7 @@ def add_arguments(parser):
     parser.add_argument("--quiet", action="store_true", help="print only the summary line")
 
 
-def imageries_from(args):
+def imageries_from(args: argparse.Namespace) -> list[training.Imagery]:
     """[(name, csv path)]: every boxes CSV once, named by --domain or by its folder (made unique)."""
     named = []
     for item in args.domain:
@@ -72,7 +73,7 @@ def imageries_from(args):
     return named
 
 
-def check_out(path):
+def check_out(path: str) -> None:
     """Fail before the work when the model cannot be written there."""
     folder = Path(path).resolve().parent
     if Path(path).is_dir():
@@ -84,7 +85,7 @@ def check_out(path):
         raise ForaNavError("--out %s: cannot write in %s" % (path, existing))
 
 
-def run(args):
+def run(args: argparse.Namespace) -> int:
     fileio.check_output_file(args.out)  # before the training run, not after it
     single_threaded()
     try:

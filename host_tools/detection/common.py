@@ -10,14 +10,14 @@ import foranav_model
 SPECIES_MODELS = {"oil_palm": "foranav_oil_palm.npz", "citrus": "foranav_citrus.npz", "olive": "foranav_olive.npz"}
 
 
-def model_path(name):
+def model_path(name: str) -> str:
     """A species name (oil_palm, citrus, olive) -> the shipped model; anything else is a file path."""
     if name in SPECIES_MODELS:
         return os.path.join(DEFAULT_MODULE_DIR, SPECIES_MODELS[name])
     return name
 
 
-def load(name):
+def load(name: str) -> foranav_model.TreeModel:
     path = model_path(name)
     if not os.path.isfile(path):
         raise ForaNavError("%s: no such model file" % path)

@@ -11,17 +11,20 @@ kind's per-window cost in the detector is far lower still, because it is folded 
 import argparse
 import json
 import time
+from collections.abc import Callable
+from typing import Any
 
 import cv2
 import numpy as np
 
 from host_tools.detection import dataset, evaluation, training
+from host_tools.detection.svm import train_linear_svm
 from host_tools.detection.threads import single_threaded
 
 import foranav_features as features
 
 
-def crop_descriptors(crops_csv):
+def crop_descriptors(crops_csv: str) -> tuple[np.ndarray, np.ndarray]:
     x, y = [], []
     for path, positive, _category in evaluation.read_crops(crops_csv):
         value = cv2.extractChannel(features.bgr_to_hsv(dataset.read_image(path)), 2)
@@ -31,7 +34,7 @@ def crop_descriptors(crops_csv):
     return np.array(x, np.float32), np.array(y, bool)
 
 
-def scores_per_window_us(predict, x, repeats=3):
+def scores_per_window_us(predict: Callable[[np.ndarray], Any], x: np.ndarray, repeats: int = 3) -> float:
     best = float("inf")
     for _ in range(repeats):
         start = time.perf_counter()
@@ -41,7 +44,7 @@ def scores_per_window_us(predict, x, repeats=3):
     return best * 1e6
 
 
-def cv_svm(kind, x, y, gamma, c=1.0, nu=0.1):
+def cv_svm(kind: int, x: np.ndarray, y: np.ndarray, gamma: float, c: float = 1.0, nu: float = 0.1) -> Any:
     model = cv2.ml.SVM_create()
     model.setKernel(cv2.ml.SVM_RBF)
     model.setGamma(gamma)
@@ -56,7 +59,7 @@ def cv_svm(kind, x, y, gamma, c=1.0, nu=0.1):
     return model
 
 
-def compare(train_csv, crops_csv, species="oil_palm", seed=11):
+def compare(train_csv: str, crops_csv: str, species: str = "oil_palm", seed: int = 11) -> dict:
     single_threaded()
     frames = dataset.load_frames([train_csv])
     rng = np.random.RandomState(seed)
@@ -67,7 +70,6 @@ def compare(train_csv, crops_csv, species="oil_palm", seed=11):
     x_test, y_test = crop_descriptors(crops_csv)
     results = {}
     # Two-class linear (without the detector's hard-negative rounds, for a like-for-like comparison)
-    from host_tools.detection.svm import train_linear_svm
     start = time.perf_counter()
     w, b = train_linear_svm(x_train, y_train, seed=seed)
     fit = time.perf_counter() - start
@@ -92,7 +94,7 @@ def compare(train_csv, crops_csv, species="oil_palm", seed=11):
     return results
 
 
-def main():
+def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("train_csv")
     parser.add_argument("crops_csv")

@@ -5,6 +5,8 @@ inside the frame; only complete trees of the species are positives (the paper's 
 complete trees"). Windows are square, W = crown size x margin, given by centre and side in frame pixels.
 """
 import math
+import os
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -12,6 +14,7 @@ import cv2
 import numpy as np
 
 from host_tools import annotations, images
+from host_tools.annotations import Box
 from host_tools.errors import ForaNavError
 
 import foranav_detector as detector_core
@@ -28,36 +31,36 @@ class Frame:
     hsv: np.ndarray = field(init=False, repr=False)
     value: np.ndarray = field(init=False, repr=False)
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         self.hsv = features.bgr_to_hsv(self.bgr)
         self.value = cv2.extractChannel(self.hsv, 2)
 
     @property
-    def width(self):
+    def width(self) -> int:
         return self.bgr.shape[1]
 
     @property
-    def height(self):
+    def height(self) -> int:
         return self.bgr.shape[0]
 
-    def complete(self, box):
+    def complete(self, box: Box) -> bool:
         x0, y0, x1, y1 = box.corners()
         return (x0 >= -EDGE_TOLERANCE_PX + 1 and y0 >= -EDGE_TOLERANCE_PX + 1
                 and x1 <= self.width - 1 + EDGE_TOLERANCE_PX and y1 <= self.height - 1 + EDGE_TOLERANCE_PX)
 
-    def trees(self, species):
+    def trees(self, species: str) -> list[Box]:
         """Complete boxes of the species."""
         return [b for b in self.boxes if b.label == species and self.complete(b)]
 
-    def window_fits(self, cx, cy, side):
+    def window_fits(self, cx: float, cy: float, side: float) -> bool:
         return side / 2.0 <= cx <= self.width - side / 2.0 and side / 2.0 <= cy <= self.height - side / 2.0
 
-    def typical_crown(self):
+    def typical_crown(self) -> float:
         """Median crown size (px) of the frame's labelled boxes (0 without any): what a user gives as --crown-px."""
         sizes = [crown_size(b) for b in self.boxes if b.label]
         return float(np.median(sizes)) if sizes else 0.0
 
-    def annotated_area(self):
+    def annotated_area(self) -> np.ndarray | None:
         """The convex hull (float32 polygon) of the labelled boxes grown by half a typical crown, or None.
 
         Survey sites often annotate one block: what lies outside the hull is neither tree nor background."""
@@ -69,16 +72,16 @@ class Frame:
             self._area = cv2.convexHull(np.array(corners, np.float32)) if corners else None
         return self._area
 
-    def in_area(self, x, y):
+    def in_area(self, x: float, y: float) -> bool:
         area = self.annotated_area()
         return area is not None and cv2.pointPolygonTest(area, (float(x), float(y)), False) >= 0
 
 
-def read_image(path):
+def read_image(path: str | os.PathLike) -> np.ndarray:
     return images.read_image(path)  # checked header: no huge allocations, truncated files refused
 
 
-def load_frames(csv_paths, limit=None):
+def load_frames(csv_paths: Sequence[str | os.PathLike], limit: int | None = None) -> list[Frame]:
     """Frames of one or more boxes CSVs (image paths relative to each CSV), in file order."""
     frames = []
     for csv_path in csv_paths:
@@ -92,11 +95,12 @@ def load_frames(csv_paths, limit=None):
     return frames
 
 
-def crown_size(box):
+def crown_size(box: Box) -> float:
     return max(box.width, box.height)
 
 
-def is_tree_window(frame, species, cx, cy, side, margin, centre_tolerance=0.25, size_tolerance=1.4):
+def is_tree_window(frame: Frame, species: str, cx: float, cy: float, side: float, margin: float,
+                   centre_tolerance: float = 0.25, size_tolerance: float = 1.4) -> bool:
     """Does this window frame a complete tree of the species well enough to count as a detection of it?"""
     for box in frame.trees(species):
         expected = crown_size(box) * margin
@@ -106,7 +110,8 @@ def is_tree_window(frame, species, cx, cy, side, margin, centre_tolerance=0.25, 
     return False
 
 
-def tree_window_mask(frame, species, cx, cy, side, margin, centre_tolerance=0.25, size_tolerance=1.4):
+def tree_window_mask(frame: Frame, species: str, cx: np.ndarray, cy: np.ndarray, side: float, margin: float,
+                     centre_tolerance: float = 0.25, size_tolerance: float = 1.4) -> np.ndarray:
     """is_tree_window for arrays of window centres cx, cy (one side): a boolean array."""
     cx, cy = np.asarray(cx, np.float64), np.asarray(cy, np.float64)
     out = np.zeros(cx.shape, bool)
@@ -117,14 +122,14 @@ def tree_window_mask(frame, species, cx, cy, side, margin, centre_tolerance=0.25
     return out
 
 
-def near_any_tree(frame, cx, cy, side):
+def near_any_tree(frame: Frame, cx: float, cy: float, side: float) -> bool:
     """Is a tree (any label, complete or not) centred inside this window? (not usable as background)"""
     half = side / 2.0
     return any(abs(b.x_center - cx) < half and abs(b.y_center - cy) < half for b in frame.boxes
                if b.label and b.label != "")
 
 
-def top_descriptor(frame, cx, cy, side, transform=0):
+def top_descriptor(frame: Frame, cx: float, cy: float, side: float, transform: int = 0) -> np.ndarray:
     """Top-layer descriptor of a window; transform 0..7 = rot90 count (0-3) and optional mirror (+4)."""
     small = features.window_with_context(frame.value, cx - side / 2.0, cy - side / 2.0, side)
     if transform % 4:
@@ -134,7 +139,7 @@ def top_descriptor(frame, cx, cy, side, transform=0):
     return features.top_layer_hog(np.ascontiguousarray(small))
 
 
-def pixel_window(frame, cx, cy, side):
+def pixel_window(frame: Frame, cx: float, cy: float, side: int) -> tuple[slice, slice]:
     """Integer slices (rows, cols) of a window clipped to the frame (the detector's window clamp)."""
     x0, y0, side = detector_core.window_in_frame(cx, cy, side, frame.height, frame.width)
     return slice(y0, y0 + side), slice(x0, x0 + side)

@@ -14,22 +14,28 @@ centre error of the hits in pixels (what the flight app servos on).
 import csv
 import io
 import math
+import os
+from collections.abc import Sequence
 from pathlib import Path
 
 import cv2
 import numpy as np
 
 from host_tools import fileio
+from host_tools.annotations import Box
 from host_tools.detection import dataset
 from host_tools.errors import ForaNavError
 
 import foranav_detector as detector_core
 import foranav_features as features
+from foranav_model import TreeModel
 
+Cues = tuple[float, float, float]  # (svm score, colour score, texture) of one window
 CROPS_HEADER = ("image", "class", "category")
 
 
-def window_cues(model, domain_index, value, hsv, small=None):
+def window_cues(model: TreeModel, domain_index: int, value: np.ndarray, hsv: np.ndarray,
+                small: np.ndarray | None = None) -> Cues:
     """(svm score, colour score, texture) of one window given as full-resolution value and HSV (and optionally
     its top-layer input with context, see foranav_features.window_with_context), against one domain."""
     small = _downscale_crop(value) if small is None else small
@@ -40,14 +46,16 @@ def window_cues(model, domain_index, value, hsv, small=None):
     return score, colour, features.hog_texture(value)
 
 
-def frame_window_cues(model, domain_index, frame, cx, cy, side):
+def frame_window_cues(model: TreeModel, domain_index: int, frame: dataset.Frame, cx: float, cy: float,
+                      side: int) -> Cues:
     """window_cues of the window (centre cx, cy; side) of an annotated frame."""
     rows, cols = dataset.pixel_window(frame, cx, cy, side)
     small = features.window_with_context(frame.value, cx - side / 2.0, cy - side / 2.0, side)
     return window_cues(model, domain_index, frame.value[rows, cols], frame.hsv[rows, cols], small)
 
 
-def passes(model, domain_index, cues, settings=None, second=None):
+def passes(model: TreeModel, domain_index: int, cues: Cues, settings: dict | None = None,
+           second: float | None = None) -> bool:
     """Does a window with these cues pass all three tests of the domain (settings override thresholds), and
     the second stage (its score `second`) for a model with one?"""
     detector = detector_core.TreeDetector(model, settings)
@@ -59,35 +67,36 @@ def passes(model, domain_index, cues, settings=None, second=None):
     return ok
 
 
-def second_score(model, value_window):
+def second_score(model: TreeModel, value_window: np.ndarray) -> float | None:
     """The second stage's score of a full-resolution value window (None: the model has none)."""
     if model.second_window is None:
         return None
     return model.second_score(features.second_stage_hog(value_window, model.second_window))
 
 
-def frame_second_score(model, frame, cx, cy, side):
+def frame_second_score(model: TreeModel, frame: dataset.Frame, cx: float, cy: float, side: float) -> float | None:
     rows, cols = dataset.pixel_window(frame, cx, cy, side)
     return second_score(model, frame.value[rows, cols])
 
 
-def classify_window(model, value, hsv, settings=None, small=None, domain_index=0):
+def classify_window(model: TreeModel, value: np.ndarray, hsv: np.ndarray, settings: dict | None = None,
+                    small: np.ndarray | None = None, domain_index: int = 0) -> tuple[bool, float, float, float]:
     """(is_tree, svm score, colour score, texture) of one window (see window_cues)."""
     cues = window_cues(model, domain_index, value, hsv, small)
     return (passes(model, domain_index, cues, settings, second_score(model, value)),) + tuple(cues)
 
 
-def nearest_domain(model, hsv):
+def nearest_domain(model: TreeModel, hsv: np.ndarray) -> int:
     """The domain index the detector would pick for a frame of this HSV image."""
     return detector_core.TreeDetector(model).select_domain(hsv)
 
 
-def _downscale_crop(value):
+def _downscale_crop(value: np.ndarray) -> np.ndarray:
     """A crop is the whole window: downscale it to W_d x W_d (its border gradients replicate)."""
     return cv2.resize(value, (features.HOG_WINDOW, features.HOG_WINDOW), interpolation=cv2.INTER_AREA)
 
 
-def crop_metrics(labels, predictions):
+def crop_metrics(labels: Sequence[bool], predictions: Sequence[bool]) -> dict:
     labels = np.asarray(labels, bool)
     predictions = np.asarray(predictions, bool)
     tp = int((labels & predictions).sum())
@@ -107,12 +116,12 @@ def crop_metrics(labels, predictions):
 # Crops
 
 
-def is_crops_csv(path):
+def is_crops_csv(path: str | os.PathLike) -> bool:
     first = fileio.read_text(path, "CSV file").partition("\n")[0]
     return tuple(h.strip() for h in first.strip().split(",")) == CROPS_HEADER
 
 
-def read_crops(csv_path):
+def read_crops(csv_path: str | os.PathLike) -> list[tuple[str, bool, str]]:
     """[(image path, is positive, category)] of a crops CSV."""
     csv_path = Path(csv_path)
     rows = list(csv.reader(io.StringIO(fileio.read_text(csv_path, "crops CSV"))))
@@ -128,7 +137,8 @@ def read_crops(csv_path):
     return crops
 
 
-def evaluate_crop_images(model, crops, settings=None):
+def evaluate_crop_images(model: TreeModel, crops: Sequence[tuple[str, bool, str]],
+                         settings: dict | None = None) -> dict:
     labels, predictions = [], []
     for path, positive, _category in crops:
         bgr = dataset.read_image(path)
@@ -140,7 +150,8 @@ def evaluate_crop_images(model, crops, settings=None):
     return crop_metrics(labels, predictions)
 
 
-def sample_frame_crops(frames, species, margin, n_pos, n_neg, seed, copies=1):
+def sample_frame_crops(frames: Sequence[dataset.Frame], species: str, margin: float, n_pos: int, n_neg: int,
+                       seed: int, copies: int = 1) -> list[tuple]:
     """[(frame, cx, cy, side, is positive)]: the crop protocol's windows cut from annotated frames.
 
     copies > 1 adds jittered positives per tree (window 0.88-1.12 x crown x margin, centre moved by up to
@@ -175,13 +186,13 @@ def sample_frame_crops(frames, species, margin, n_pos, n_neg, seed, copies=1):
     return _subsample(positives, n_pos, rng) + _subsample(negatives, n_neg, rng)
 
 
-def _subsample(items, count, rng):
+def _subsample(items: list, count: int, rng: np.random.RandomState) -> list:
     if len(items) <= count:
         return items
     return [items[i] for i in sorted(rng.choice(len(items), count, replace=False))]
 
 
-def evaluate_frame_crops(model, crops, settings=None):
+def evaluate_frame_crops(model: TreeModel, crops: Sequence[tuple], settings: dict | None = None) -> dict:
     """The crop protocol on windows cut from frames; each frame's domain: the settings', else the nearest."""
     labels, predictions = [], []
     domains = {}
@@ -195,7 +206,7 @@ def evaluate_frame_crops(model, crops, settings=None):
     return crop_metrics(labels, predictions)
 
 
-def _domain_index(model, settings, hsv):
+def _domain_index(model: TreeModel, settings: dict | None, hsv: np.ndarray) -> int:
     if settings is not None and settings.domain is not None:
         return [d.name for d in model.domains].index(model.domain(settings.domain).name)
     return nearest_domain(model, hsv)
@@ -205,7 +216,7 @@ def _domain_index(model, settings, hsv):
 # Frames
 
 
-def match_detections(detections, truths):
+def match_detections(detections: Sequence, truths: Sequence[Box]) -> tuple[list[tuple], list, list[Box]]:
     """Greedy matching, detections best first -> (hits [(detection, truth)], false positives, misses)."""
     unmatched = list(truths)
     hits, false_positives = [], []
@@ -224,7 +235,7 @@ def match_detections(detections, truths):
 FUNNEL_STAGES = ("svm", "peak", "cap", "nms", "colour", "second", "texture")  # second: = colour without one
 
 
-def frame_window_sizes(model, frame, crown_px):
+def frame_window_sizes(model: TreeModel, frame: dataset.Frame, crown_px: float | str | None) -> list[int] | None:
     """Window sizes for whole-frame detection: None (the model's, by frame width), from a crown size in
     pixels, or "boxes": from the frame's own typical annotated crown (as a user who knows it would give)."""
     if crown_px is None:
@@ -256,7 +267,8 @@ def _funnel(trace, truths, settings_threshold):
     return {name: sum(1 for box in truths if centred(items, box)) for name, items in stages.items()}
 
 
-def evaluate_frames(model, frames, settings=None, hull=False, crown_px=None, funnel=False):
+def evaluate_frames(model: TreeModel, frames: Sequence[dataset.Frame], settings: dict | None = None,
+                    hull: bool = False, crown_px: float | str | None = None, funnel: bool = False) -> dict:
     """Frame-level figures of the detector on annotated frames (see the module docstring).
 
     hull: score only inside each frame's annotated area (detections outside it are ignored); crown_px: see
@@ -332,7 +344,7 @@ def _figures(n_hits, n_fp, n_miss, errors, n_frames):
     }
 
 
-def combine(results):
+def combine(results: Sequence[dict]) -> dict:
     """Pooled figures of several evaluate_frames results (hits, false alarms and misses added up)."""
     hits = sum(r["n_hits"] for r in results)
     false_alarms = sum(r["n_false_alarms"] for r in results)
@@ -341,7 +353,7 @@ def combine(results):
     return _figures(hits, false_alarms, misses, errors, sum(r["n_frames"] for r in results))
 
 
-def precision_recall_curve(scored, n_trees):
+def precision_recall_curve(scored: Sequence[tuple], n_trees: int) -> list[tuple[float, float, float]]:
     """[(score threshold, precision, recall)] over the detections' scores (best first)."""
     points = []
     hits = 0

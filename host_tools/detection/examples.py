@@ -1,14 +1,18 @@
 """Training examples of a detector model (steps 1-3 of host_tools.detection.training): the descriptors of
 positive windows (augmented), negative windows (look-alikes, shifted, wrongly sized, background), ready-made
 crops and hard negatives mined with the current model, and each imagery's colour model."""
+from collections.abc import Iterator, Sequence
+
 import cv2
 import numpy as np
 
 from host_tools.detection import dataset
+from host_tools.detection.dataset import Frame
 from host_tools.detection.svm import train_linear_svm
 
 import foranav_detector as detector_core
 import foranav_features as features
+from foranav_model import TreeModel
 
 SIZE_JITTER = 1.2  # positives drawn at crown x margin x [1/J, J]: covers the gaps between window sizes
 CENTRE_JITTER = 0.05  # of W, standard deviation (clipped at 2.5 sigma): a complete tree need not be centred
@@ -23,7 +27,8 @@ COLOUR_SVM_C = 0.1
 SURVEY_BACKGROUND_SCALE = (0.8, 1.25)  # survey background windows: the imagery's window size x this
 
 
-def colour_model(frames, species, margin, kind, templates, rng, survey):
+def colour_model(frames: Sequence[Frame], species: str, margin: float, kind: str, templates: int,
+                 rng: np.random.RandomState, survey: bool) -> tuple[np.ndarray, float]:
     """(colour vectors, bias) of one imagery: K templates (K = 1: the mean histogram of the crowns' colour
     regions; more: seeded k-means of them), or a linear classifier of crowns against the imagery's other
     windows (look-alikes, windows cutting a crown, background)."""
@@ -56,7 +61,7 @@ def colour_model(frames, species, margin, kind, templates, rng, survey):
     return weights[None, :], bias
 
 
-def _kmeans(points, k, rng, iterations=25):
+def _kmeans(points: np.ndarray, k: int, rng: np.random.RandomState, iterations: int = 25) -> np.ndarray:
     """Seeded k-means (k-means++ start) of histogram vectors -> (k, d) centres."""
     centres = [points[rng.randint(len(points))]]
     for _ in range(1, k):
@@ -70,7 +75,8 @@ def _kmeans(points, k, rng, iterations=25):
     return centres
 
 
-def positive_windows(frames, species, margin, rng):
+def positive_windows(frames: Sequence[Frame], species: str, margin: float,
+                     rng: np.random.RandomState) -> Iterator[tuple]:
     """(frame, cx, cy, side, transform) of the augmented positives: POSITIVE_COPIES per complete tree, all but
     the first with size and centre jitter, each in a random rotation/mirror (0..7)."""
     for frame in frames:
@@ -84,13 +90,14 @@ def positive_windows(frames, species, margin, rng):
                     yield frame, cx, cy, side, rng.randint(8)
 
 
-def positive_descriptors(frames, species, margin, rng):
+def positive_descriptors(frames: Sequence[Frame], species: str, margin: float,
+                         rng: np.random.RandomState) -> np.ndarray:
     out = [dataset.top_descriptor(frame, cx, cy, side, transform=transform)
            for frame, cx, cy, side, transform in positive_windows(frames, species, margin, rng)]
     return np.array(out, np.float32).reshape(-1, features.hog_descriptor_length())
 
 
-def crop_descriptors(crops, rng):
+def crop_descriptors(crops: Sequence, rng: np.random.RandomState) -> tuple[np.ndarray, np.ndarray]:
     """Descriptors of crop images (each one window; positives in 4 of their 8 rotations/mirrors)."""
     positives, negatives = [], []
     for bgr, positive in crops:
@@ -104,7 +111,8 @@ def crop_descriptors(crops, rng):
     return (np.array(positives, np.float32).reshape(-1, length), np.array(negatives, np.float32).reshape(-1, length))
 
 
-def negative_descriptors(frames, species, margin, rng, survey=False):
+def negative_descriptors(frames: Sequence[Frame], species: str, margin: float, rng: np.random.RandomState,
+                         survey: bool = False) -> np.ndarray:
     out = []
     for frame in frames:
         for cx, cy, side in negative_windows(frame, species, margin, rng, survey):
@@ -112,7 +120,8 @@ def negative_descriptors(frames, species, margin, rng, survey=False):
     return np.array(out, np.float32).reshape(-1, features.hog_descriptor_length())
 
 
-def negative_windows(frame, species, margin, rng, survey=False):
+def negative_windows(frame: Frame, species: str, margin: float, rng: np.random.RandomState,
+                     survey: bool = False) -> list[tuple[float, float, int]]:
     """Negative windows of a frame. Survey imagery (survey=True): background at the imagery's crown scale
     and only inside the annotated area (outside it, trees are not labelled)."""
     windows = []
@@ -163,7 +172,7 @@ def _windows(frames, margin, wanted):
                     yield frame, rows, cols
 
 
-def survey_windows(frame, margin):
+def survey_windows(frame: Frame, margin: float) -> tuple[int, ...]:
     """Window sizes for mining a survey frame at its own crown scale: its crown sizes x margin, at most 3."""
     sizes = sorted({max(features.HOG_WINDOW, int(round(dataset.crown_size(b) * margin)))
                     for b in frame.boxes if b.label})
@@ -172,7 +181,8 @@ def survey_windows(frame, margin):
     return tuple(s for s in sizes if s <= min(frame.width, frame.height))
 
 
-def hard_negatives(frames, species, model, rng, survey=False):
+def hard_negatives(frames: Sequence[Frame], species: str, model: TreeModel, rng: np.random.RandomState,
+                   survey: bool = False) -> np.ndarray:
     """Windows the current model scores above HARD_NEGATIVE_SCORE that are not trees of the species (survey
     imagery: at the frame's crown scale, inside its annotated area). Vectorised over each score map: a
     survey image holds hundreds of thousands of windows. Per frame and round: the best half of the quota and a
@@ -208,14 +218,14 @@ def hard_negatives(frames, species, model, rng, survey=False):
     return np.array(out, np.float32).reshape(-1, features.hog_descriptor_length())
 
 
-def hard_negative_quota(frame, species):
+def hard_negative_quota(frame: Frame, species: str) -> int:
     """Hard negatives mined per round from one survey frame: one per complete crown of the species, at least
     HARD_NEGATIVES_PER_FRAME. A survey image of 60 crowns has the false alarms of many camera frames; ten per
     image (the camera frames' quota) left most of them unseen by the SVM."""
     return max(HARD_NEGATIVES_PER_FRAME, int(round(SURVEY_HARD_NEGATIVES_PER_CROWN * len(frame.trees(species)))))
 
 
-def _area_mask(frame):
+def _area_mask(frame: Frame) -> np.ndarray:
     """Boolean image of the frame's annotated area (all False without labelled boxes)."""
     mask = np.zeros((frame.height, frame.width), np.uint8)
     area = frame.annotated_area()
@@ -232,7 +242,8 @@ SECOND_STAGE_SCORE = -1.0  # first-stage group bests above this are the second s
 SECOND_STAGE_SPREAD = (0.85, 1.0, 1.18)  # false alarms at typical crown x margin x these (detection's sizes)
 
 
-def second_descriptor(frame, cx, cy, side, window, transform=0):
+def second_descriptor(frame: Frame, cx: float, cy: float, side: float, window: int,
+                      transform: int = 0) -> np.ndarray:
     """foranav_features.second_stage_hog of a frame window; transform 0..7 as dataset.top_descriptor."""
     rows, cols = dataset.pixel_window(frame, cx, cy, side)
     crop = frame.value[rows, cols]
@@ -243,7 +254,8 @@ def second_descriptor(frame, cx, cy, side, window, transform=0):
     return features.second_stage_hog(np.ascontiguousarray(crop), window)
 
 
-def second_stage_examples(frames, species, model, window, rng, survey):
+def second_stage_examples(frames: Sequence[Frame], species: str, model: TreeModel, window: int,
+                          rng: np.random.RandomState, survey: bool) -> tuple[np.ndarray, np.ndarray]:
     """(descriptors, labels) of the second stage from one imagery's learning frames: the positives as the
     first stage's (augmented crowns), the first stage's negative windows and, on survey frames, the first
     stage's own false alarms: each group's best window above SECOND_STAGE_SCORE (colour and texture not
@@ -264,7 +276,7 @@ def second_stage_examples(frames, species, model, window, rng, survey):
     return np.array(x, np.float32).reshape(-1, features.hog_descriptor_length(window)), np.array(y)
 
 
-def first_stage_false_alarms(frame, species, model):
+def first_stage_false_alarms(frame: Frame, species: str, model: TreeModel) -> list[tuple]:
     """[(score, cx, cy, side)]: the first stage's group-best windows on a survey frame at its crown scale."""
     crown = frame.typical_crown()
     sizes = sorted(set(max(features.HOG_WINDOW, int(round(crown * model.window_margin * spread)))

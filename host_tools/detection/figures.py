@@ -8,12 +8,14 @@ drawn as on the camera). The views: map 1 between two palms, the coconut of map 
 the clustered crowns of map 3, and a palm cut by the frame edge (map 1).
 """
 import argparse
+from collections.abc import Sequence
 from pathlib import Path
 
 import cv2
 import numpy as np
 
 from host_tools import fileio
+from host_tools.jevois_host import ModuleRunner
 from host_tools.maps import load_map
 from host_tools.sim.camera import CameraModel, Pose
 from host_tools.sim.world import SENSOR_EFFECTS, World
@@ -22,9 +24,8 @@ TIMER_FRAMES = 101  # the module's Timer reports every 100 frames
 VIEWS = (("map1", 1.60, 0.45), ("map2", 2.45, 0.70), ("map3", 3.00, 0.50), ("map1", 2.95, 0.20))
 
 
-def example_mosaic(views=VIEWS, seed=0):
+def example_mosaic(views: Sequence[tuple[str, float, float]] = VIEWS, seed: int = 0) -> np.ndarray:
     """2 x 2 mosaic (BGR) of the module's drawn output on the given (map, x, y) views."""
-    from host_tools.jevois_host import ModuleRunner
     runner = ModuleRunner()
     tiles = []
     for index, (name, x, y) in enumerate(views):
@@ -37,7 +38,7 @@ def example_mosaic(views=VIEWS, seed=0):
     return np.vstack([np.hstack(tiles[:2]), np.hstack(tiles[2:4])])
 
 
-def main(argv=None):
+def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", default="docs/img", help="output folder (default docs/img)")
     args = parser.parse_args(argv)

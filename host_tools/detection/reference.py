@@ -4,6 +4,8 @@ Same windows, features, model and post-processing as the camera's fast path (for
 window is cut out, downscaled and described on its own, the way the paper's pipeline reads: crop -> HSV ->
 value -> downscale to W_d -> HOG -> SVM. The fast path must agree with it (tests) and beat it (bench).
 """
+from typing import Any
+
 import numpy as np
 
 import host_tools.detection  # noqa: F401  (puts the camera module folder on sys.path)
@@ -11,12 +13,12 @@ import host_tools.detection  # noqa: F401  (puts the camera module folder on sys
 import foranav_features as features
 
 
-def score_map_shape(plan):
+def score_map_shape(plan: Any) -> tuple[int, int]:
     """(rows, cols) of a size's score map: window origins on the lattice, every `stride`-th one."""
     return (-(-plan.map_height // plan.stride), -(-plan.map_width // plan.stride))
 
 
-def reference_score_maps(detector, value):
+def reference_score_maps(detector: Any, value: np.ndarray) -> list[np.ndarray]:
     """[(plan, scores)] like TreeDetector.score_maps, one window at a time."""
     out = []
     for plan in detector.plans(*value.shape):
@@ -34,7 +36,7 @@ def reference_score_maps(detector, value):
     return out
 
 
-def reference_detect(detector, bgr):
+def reference_detect(detector: Any, bgr: np.ndarray) -> list:
     """Detections of the per-window pipeline (same post-processing as the fast path)."""
     hsv = features.bgr_to_hsv(bgr)
     value = np.ascontiguousarray(hsv[:, :, 2])

@@ -6,14 +6,18 @@ each cue does on the data the model was trained on, not how well it generalises 
 Each imagery is judged with its own colour model and thresholds; an imagery without the species with the
 domain the detector would pick for each of its frames (nearest colours).
 """
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 
 from host_tools import fileio
 from host_tools.detection import dataset, evaluation
+from host_tools.detection.training import Imagery
+from host_tools.plotting import plt
 
 import foranav_detector as detector_core
+from foranav_model import TreeModel
 
 MAX_WINDOWS = 200  # per imagery and label (seeded sample)
 CUES = ("svm", "colour", "texture", "all")
@@ -23,7 +27,7 @@ OTHER_CUES_SHARE = 0.1  # ... when at least this share passes them: colour alone
 LOOKALIKE_PASS_SHARE = 0.1
 
 
-def cue_pass_rates(model, imageries, seed=0):
+def cue_pass_rates(model: TreeModel, imageries: Sequence[Imagery], seed: int = 0) -> list[dict]:
     """[{imagery, label, n, domain, svm, colour, texture, all}] (shares 0..1), the species first."""
     rng = np.random.RandomState(seed)
     names = [d.name for d in model.domains]
@@ -54,7 +58,7 @@ def cue_pass_rates(model, imageries, seed=0):
     return rows
 
 
-def _passes_each(model, domain_index, cues):
+def _passes_each(model: TreeModel, domain_index: int, cues: tuple[float, float, float]) -> list[bool]:
     domain = model.domains[domain_index]
     score, colour, texture = cues
     each = list(detector_core.threshold_tests(score, colour, texture, domain.svm_threshold, domain.hs_threshold,
@@ -62,7 +66,8 @@ def _passes_each(model, domain_index, cues):
     return each + [all(each)]
 
 
-def warnings_for(rows, imageries, domain_names=None):
+def warnings_for(rows: Sequence[dict], imageries: Sequence[Imagery],
+                 domain_names: Sequence[str] | None = None) -> list[str]:
     out = []
     for row in rows:
         where = "%s (%s)" % (row["imagery"], row["label"])
@@ -87,7 +92,7 @@ def warnings_for(rows, imageries, domain_names=None):
     return out
 
 
-def write_report(model, imageries, folder, seed=0):
+def write_report(model: TreeModel, imageries: Sequence[Imagery], folder: Path, seed: int = 0) -> dict:
     """Write folder/report.md and folder/cues.png; returns {"path", "warnings", "rows"}."""
     folder = Path(folder)
     rows = cue_pass_rates(model, imageries, seed)
@@ -114,10 +119,7 @@ def write_report(model, imageries, folder, seed=0):
     return {"path": str(folder / "report.md"), "warnings": warnings, "rows": rows}
 
 
-def _plot(rows, path):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+def _plot(rows: Sequence[dict], path: Path) -> None:
     figure, axis = plt.subplots(figsize=(max(6, 0.9 * len(rows) + 2), 4))
     x = np.arange(len(rows))
     for i, cue in enumerate(CUES):

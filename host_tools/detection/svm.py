@@ -11,7 +11,8 @@ import numpy as np
 BIAS_FEATURE = 1.0
 
 
-def train_linear_svm(features, labels, c=1.0, seed=0, max_epochs=60, tolerance=1e-3):
+def train_linear_svm(features: np.ndarray, labels: np.ndarray, c: float = 1.0, seed: int = 0, max_epochs: int = 60,
+                     tolerance: float = 1e-3) -> tuple[np.ndarray, float]:
     """features (n, d), labels in {-1, +1} -> (weights (d,) float32, bias float)."""
     x = np.asarray(features, np.float64)
     y = np.where(np.asarray(labels) > 0, 1.0, -1.0)

@@ -6,14 +6,20 @@ fine, high-contrast leaflets; a "roof" is a grey rectangle with a ridge and tile
 brown noise. Everything is drawn from a seed.
 """
 import math
+from collections.abc import Iterable
 
 import cv2
 import numpy as np
 
+from host_tools.annotations import Box
+from host_tools.detection import dataset, training
+
+from foranav_model import TreeModel
+
 GROUND_BGR = (70, 100, 125)
 
 
-def ground(rng, height, width):
+def ground(rng: np.random.RandomState, height: int, width: int) -> np.ndarray:
     base = np.empty((height, width, 3), np.float32)
     base[:] = GROUND_BGR
     noise = cv2.resize(rng.normal(0, 12, (height // 8 + 1, width // 8 + 1)).astype(np.float32), (width, height))
@@ -22,7 +28,7 @@ def ground(rng, height, width):
     return np.clip(base, 0, 255).astype(np.uint8)
 
 
-def draw_palm(image, rng, cx, cy, diameter):
+def draw_palm(image: np.ndarray, rng: np.random.RandomState, cx: float, cy: float, diameter: float) -> None:
     """A star-shaped crown of `diameter` pixels centred at (cx, cy), drawn in place."""
     radius = diameter / 2.0
     cv2.circle(image, (int(round(cx)), int(round(cy))), int(radius * 0.5), (20, 45, 30), -1, cv2.LINE_AA)
@@ -43,7 +49,7 @@ def draw_palm(image, rng, cx, cy, diameter):
                 cv2.line(image, _pt(px, py), _pt(*end), colour, 1, cv2.LINE_AA)
 
 
-def draw_roof(image, rng, cx, cy, size):
+def draw_roof(image: np.ndarray, rng: np.random.RandomState, cx: float, cy: float, size: float) -> None:
     """A grey gabled roof, size pixels across, drawn in place."""
     half = size / 2.0
     x0, y0, x1, y1 = _pt(cx - half, cy - half * 0.7), (0, 0), (0, 0), _pt(cx + half, cy + half * 0.7)
@@ -54,7 +60,8 @@ def draw_roof(image, rng, cx, cy, size):
     del y0, x1
 
 
-def scene(seed, width=352, height=288, palms=2, roofs=1, diameter=(80, 110), margin=None):
+def scene(seed: int, width: int = 352, height: int = 288, palms: int = 2, roofs: int = 1,
+          diameter: tuple[float, float] = (80, 110), margin: float | None = None) -> tuple[np.ndarray, list, list]:
     """(BGR image, [(cx, cy, diameter) of palms], [(cx, cy, size) of roofs]); palms lie wholly in frame."""
     rng = np.random.RandomState(seed)
     image = ground(rng, height, width)
@@ -80,14 +87,13 @@ def scene(seed, width=352, height=288, palms=2, roofs=1, diameter=(80, 110), mar
     return image, palms_out, roofs_out
 
 
-def _pt(x, y):
+def _pt(x: float, y: float) -> tuple[int, int]:
     return int(round(x)), int(round(y))
 
 
-def annotated_frames(seeds, width=352, height=288, diameter=(65, 130)):
+def annotated_frames(seeds: Iterable[int], width: int = 352, height: int = 288,
+                     diameter: tuple[float, float] = (65, 130)) -> list[dataset.Frame]:
     """host_tools.detection.dataset.Frame objects of synthetic scenes (palms labelled oil_palm, roofs roof)."""
-    from host_tools.annotations import Box
-    from host_tools.detection import dataset
     frames = []
     for seed in seeds:
         image, palms, roofs = scene(seed, width, height, palms=2, roofs=1, diameter=diameter)
@@ -97,7 +103,6 @@ def annotated_frames(seeds, width=352, height=288, diameter=(65, 130)):
     return frames
 
 
-def small_model(seed=1, frames=30):
+def small_model(seed: int = 1, frames: int = 30) -> TreeModel:
     """A detector model trained on synthetic scenes in about a second (for tests; not a shipped model)."""
-    from host_tools.detection import training
     return training.train(annotated_frames(range(1000 + seed, 1000 + seed + frames)), "oil_palm", seed=seed)

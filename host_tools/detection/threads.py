@@ -7,14 +7,14 @@ The camera's numpy has no threaded BLAS, so this only makes the host behave like
 import ctypes
 
 import cv2
+import numpy  # noqa: F401  (loaded first, so that numpy's BLAS is among the libraries limited below)
 
 _SETTERS = ("scipy_openblas_set_num_threads64_", "scipy_openblas_set_num_threads_64_",
             "openblas_set_num_threads64_", "openblas_set_num_threads", "goto_set_num_threads")
 
 
-def single_threaded():
+def single_threaded() -> int:
     """Limit OpenCV and any loaded OpenBLAS to one thread; returns the number of BLAS libraries limited."""
-    import numpy  # noqa: F401  (make sure numpy's BLAS is loaded)
     cv2.setNumThreads(1)
     limited = 0
     for path in _loaded_libraries():
@@ -33,7 +33,7 @@ def single_threaded():
     return limited
 
 
-def _loaded_libraries():
+def _loaded_libraries() -> list[str]:
     try:
         with open("/proc/self/maps") as maps:
             return sorted({line.split()[-1] for line in maps if ".so" in line})

@@ -22,6 +22,7 @@ and, per imagery with trees of the species (a "domain"), a colour model and the 
 Steps 1-3's examples live in ``detection.examples``, steps 4-5 in ``detection.calibration``; this module
 composes them (``train``) and re-exports their names.
 """
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -60,7 +61,7 @@ class Imagery:
     source: str = ""
 
 
-def as_imageries(data):
+def as_imageries(data: Sequence[Imagery] | Sequence[dataset.Frame]) -> list[Imagery]:
     """A list of Imagery, or of frames (one imagery named 'default')."""
     data = list(data)
     if data and not isinstance(data[0], Imagery):
@@ -68,20 +69,22 @@ def as_imageries(data):
     return data
 
 
-def is_camera_imagery(imagery, reference_width):
+def is_camera_imagery(imagery: Imagery, reference_width: int) -> bool:
     """Frames of the flight camera (the model's reference width): the model's window sizes fit them."""
     return all(f.width == reference_width for f in imagery.frames)
 
 
-def calibration_count(n_frames):
+def calibration_count(n_frames: int) -> int:
     """Frames held back per imagery: a fifth; one of a small imagery (3-9 frames); none below 3."""
     if n_frames >= 10:
         return int(round(CALIBRATION_SPLIT * n_frames))
     return 1 if n_frames >= 3 else 0
 
 
-def train(data, species, seed=0, window_sizes=DEFAULT_WINDOW_SIZES, reference_width=DEFAULT_REFERENCE_WIDTH,
-          margin=DEFAULT_MARGIN, log=None, crops=(), colour_kind="templates", colour_templates=1, provenance=""):
+def train(data: Sequence[Imagery] | Sequence[dataset.Frame], species: str, seed: int = 0,
+          window_sizes: Sequence[int] = DEFAULT_WINDOW_SIZES, reference_width: int = DEFAULT_REFERENCE_WIDTH,
+          margin: float = DEFAULT_MARGIN, log: Callable[[str], None] | None = None, crops: Sequence = (),
+          colour_kind: str = "templates", colour_templates: int = 1, provenance: str = "") -> TreeModel:
     """Train a TreeModel for `species` from annotated imageries (or frames). Same inputs and seed -> same model.
 
     Each imagery's frames are split (seeded): the SVM learns from CALIBRATION_SPLIT's complement, and the

@@ -3,7 +3,9 @@
 Meant for ``foranav bench flight [--json] [--seed N]`` (the bench dispatcher lists its targets); prints
 figures, asserts nothing.
 """
+import argparse
 import json
+import sys
 import time
 
 from host_tools.flight import OracleCamera, run_flight
@@ -12,7 +14,7 @@ from host_tools.maps import load_map
 MAPS = ("map1", "map2", "map3")
 
 
-def measure(seed=0):
+def measure(seed: int = 0) -> list[dict]:
     rows = []
     for name in MAPS:
         pmap = load_map(name)
@@ -25,7 +27,7 @@ def measure(seed=0):
     return rows
 
 
-def run(args):
+def run(args: argparse.Namespace) -> int:
     rows = measure(getattr(args, "seed", 0))
     if getattr(args, "json", False):
         print(json.dumps({"flight": rows}, indent=2))
@@ -38,9 +40,6 @@ def run(args):
 
 
 if __name__ == "__main__":
-    import argparse
-    import sys
-
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--json", action="store_true")
     parser.add_argument("--seed", type=int, default=0)

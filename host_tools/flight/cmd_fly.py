@@ -25,15 +25,20 @@ Examples:
   foranav fly --map map3 --camera oracle --hide-tree 6 --hide-s 5 --mavlink udpout:127.0.0.1:14550
   foranav fly --map map1 --crowns ../shared/data/real/oilpalm_gearth_detectree2/boxes.csv --model real.npz
 """
+import argparse
 import json
 import math
 import sys
 import time
 from pathlib import Path
+from typing import TextIO
 
 from host_tools import argtypes, fileio
 from host_tools.errors import ForaNavError
+from host_tools.flight import camera_factory, run_flight
+from host_tools.flight.realtime import run_realtime
 from host_tools.flight.vision_camera import model_option
+from host_tools.maps import load_map
 from host_tools.sim.cli_args import add_appearance_arguments, appearance_from_args, appearance_spec_from_args
 
 CAMERA_CHOICES = ("oracle", "sim")
@@ -44,7 +49,7 @@ FPS_RANGE = (2.0, 120.0)
 LATENCY_MAX_MS = 5000  # app.camLatency is a uint16 and a latency of seconds already means a broken camera
 
 
-def add_arguments(parser):
+def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--map", required=True, help="built-in map name (map1, map2, map3) or map file")
     parser.add_argument("--camera", choices=CAMERA_CHOICES, default="sim",
                         help="sim (default): rendered frames + the JeVois module; oracle: ground-truth detector")
@@ -91,7 +96,7 @@ def add_arguments(parser):
                         help="flight app: python (default) or c (the C core of crazyflie_app/bolt, as on the Bolt)")
 
 
-def flight_options(args):
+def flight_options(args: argparse.Namespace) -> dict:
     """The harness options of parsed fly arguments (ranges are the argument types'; sweeps build their flights
     with it)."""
     options = {"dropout": args.dropout, "model": {"estimator": args.estimator, "wind_gust_mps2": args.wind},
@@ -106,7 +111,7 @@ def flight_options(args):
     return options
 
 
-def _window(text):
+def _window(text: str) -> tuple[float, float]:
     try:
         start, duration = (float(part) for part in text.split(":"))
     except ValueError:
@@ -116,7 +121,7 @@ def _window(text):
     return (start, duration)
 
 
-def camera_kwargs(args):
+def camera_kwargs(args: argparse.Namespace) -> dict:
     """The camera factory's keyword arguments of parsed fly arguments, photo crowns and model included (sweeps
     build their flights with it; the species check against one map is run()'s)."""
     kwargs = {}
@@ -136,7 +141,7 @@ def camera_kwargs(args):
     return kwargs
 
 
-def print_table(summary, out=None):
+def print_table(summary: dict, out: TextIO | None = None) -> None:
     out = out or sys.stdout
     mean = summary["mean_deviation_m"]
     ci = summary["ci95_m"]
@@ -170,10 +175,7 @@ def print_table(summary, out=None):
         print("  tlog %s\n  plot %s" % (summary["tlog"], summary["plot"]), file=out)
 
 
-def run(args):
-    from host_tools.flight import camera_factory, run_flight
-    from host_tools.maps import load_map
-
+def run(args: argparse.Namespace) -> int:
     factory = camera_factory(args.camera)
     options = flight_options(args)
     if args.kill_camera_at is not None and not args.realtime:
@@ -207,7 +209,6 @@ def run(args):
             print("  t = %5.0f s  %s" % (t_s, phase), file=sys.stderr)
 
     if args.realtime:
-        from host_tools.flight.realtime import run_realtime
         summary = run_realtime(pmap, seed=args.seed, speed=args.speed, out_dir=out, options=options,
                                kill_camera_at_s=args.kill_camera_at, camera_kwargs=kwargs, progress=progress)
     else:

@@ -14,6 +14,7 @@ Examples:
   foranav paper-tests --crowns ../shared/data/real/oilpalm_gearth_detectree2/boxes.csv --model real.npz
   foranav paper-tests --app c
 """
+import argparse
 import json
 import sys
 import time
@@ -21,10 +22,14 @@ from pathlib import Path
 
 from host_tools import argtypes, fileio
 from host_tools.errors import ForaNavError
+from host_tools.flight import paper_tests
+from host_tools.flight.paper_tests import PAPER_TESTS
+from host_tools.flight.vision_camera import model_option
+from host_tools.maps import load_map
 from host_tools.sim.cli_args import add_appearance_arguments, appearance_from_args
 
 
-def add_arguments(parser):
+def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", default="runs/paper-tests", help="output folder (default runs/paper-tests/)")
     parser.add_argument("--json", action="store_true", help='print {"tests": [...]} (each the fly summary plus '
                         '"test" and "map") instead of the table')
@@ -39,8 +44,6 @@ def add_arguments(parser):
 
 
 def _selected(text):
-    from host_tools.flight.paper_tests import PAPER_TESTS
-
     if not text:
         return PAPER_TESTS
     try:
@@ -55,9 +58,6 @@ def _selected(text):
 
 def _camera_kwargs(args, tests):
     """--crowns/--ground/--model, checked once here (the workers load them again)."""
-    from host_tools.flight.vision_camera import model_option
-    from host_tools.maps import load_map
-
     species = {t.species for test in tests for t in load_map(test.map).trees}
     spec, _ = appearance_from_args(args, species, "the paper maps")
     kwargs = {} if spec.default else {"appearance": spec.to_dict()}
@@ -66,9 +66,7 @@ def _camera_kwargs(args, tests):
     return kwargs
 
 
-def run(args):
-    from host_tools.flight import paper_tests
-
+def run(args: argparse.Namespace) -> int:
     tests = _selected(args.tests)
     fileio.check_output_dir(args.out)
     if args.jobs is not None and args.jobs < 1:

@@ -10,16 +10,21 @@ Examples:
   foranav replay tests/fixtures/clips/map1_full
   foranav replay my_clip/ --map map2 --json
 """
+import argparse
 import json
 import sys
+from typing import TextIO
 
 from host_tools import argtypes
 from host_tools.errors import ForaNavError
+from host_tools.flight.replay import replay_clip
+from host_tools.maps import load_map
+from host_tools.sim.clip import read_clip
 
 LATENCY_MAX_MS = 5000  # as fly --latency-ms
 
 
-def add_arguments(parser):
+def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("clip", help="clip folder (clip.avi + clip.json) or its clip.json")
     parser.add_argument("--map", help="map giving the path F, when the sidecar has none (or to override it)")
     parser.add_argument("--latency-ms", type=argtypes.int_range(0, LATENCY_MAX_MS), default=None,
@@ -30,7 +35,7 @@ def add_arguments(parser):
                         help="flight app: python (default) or c (the C core of crazyflie_app/bolt)")
 
 
-def print_report(report, out=None):
+def print_report(report: dict, out: TextIO | None = None) -> None:
     out = out or sys.stdout
     det = report["detection"]
     print("replay %s: %d frames, %.1f s, latency %d ms" % (report["clip"], report["frames"], report["duration_s"],
@@ -56,11 +61,7 @@ def print_report(report, out=None):
                                                                  row["z"]), file=out)
 
 
-def run(args):
-    from host_tools.flight.replay import replay_clip
-    from host_tools.maps import load_map
-    from host_tools.sim.clip import read_clip
-
+def run(args: argparse.Namespace) -> int:
     clip = read_clip(args.clip)
     clip.check_video()
     pmap = load_map(args.map) if args.map else None

@@ -4,17 +4,23 @@ Crazyflie + pty wire + the app), ``FlightRecord`` (taps: reached trees, trajecto
 (trajectory, telemetry, progress, stop after landing)."""
 import heapq
 import math
+import os
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 
 from crazyflie_app.firmware import Crazyflie, MavModelConfig, v_task_delay
+from crazyflie_app.firmware.commander import setpoint_t
+from crazyflie_app.firmware.freertos import Task
 from crazyflie_app.firmware.supervisor import LANDED, LOCKED, WARNING_LEVEL_OUT
 from crazyflie_app.navigation_core import (PHASE_APPROACH, PHASE_DONE, PHASE_NAMES, PHASE_NO_CAMERA, PHASE_NO_DECK,
                                            rotate)
 from host_tools.errors import ForaNavError
-from host_tools.flight.registry import app_factory
+from host_tools.flight.registry import Camera, app_factory
+from host_tools.flight.telemetry import TlogWriter
 from host_tools.flight.wire import PtyWire
+from host_tools.maps import PlantationMap
 
 WORLD_TASK_PRI = 6  # above the stabilizer: bytes land on the wire before the firmware looks at the tick
 MONITOR_TASK_PRI = 0  # below the app: samples what the app did on this tick
@@ -31,10 +37,10 @@ GARBAGE_LINES = (b"OK", b"ERR Unsupported command [foo]", b"ALIVE", b"INF Camera
                  b"X" * 150, b"T2 1 2 3 4 5 6 7 8 9 " * 8)
 MAV_STATE_STANDBY, MAV_STATE_ACTIVE, MAV_STATE_CRITICAL, MAV_STATE_EMERGENCY = 3, 4, 5, 6
 
-class FlightRig(object):
+class FlightRig:
     """The bench: the emulated Crazyflie, the pty wire and the app under test, configured for one map."""
 
-    def __init__(self, pmap, camera, seed, options):
+    def __init__(self, pmap: PlantationMap, camera: Camera, seed: int, options: dict):
         start = options["start"] or pmap.waypoints[0]
         try:
             model = MavModelConfig(**(options["model"] or {})).validate()
@@ -63,28 +69,27 @@ class FlightRig(object):
         self.mount = tuple(getattr(camera, "mount_offset",
                                    (self.app.params.cam_offset_x_m, self.app.params.cam_offset_y_m)))
 
-    def now(self):
+    def now(self) -> int:
         return self.cf.x_task_get_tick_count()
 
-    def true_pose(self):
+    def true_pose(self) -> tuple[float, float, float, float]:
         t = self.cf.model.truth
         return (t.x, t.y, t.z, t.yaw)
 
-    def camera_ground_point(self):
+    def camera_ground_point(self) -> tuple[float, float]:
         x, y, z, yaw = self.true_pose()
         ox, oy = rotate(yaw, *self.mount)
         return x + ox, y + oy
 
-    def close(self):
+    def close(self) -> None:
         self.app.link.close()
         self.wire.close()
 
 
-def open_tlog(out_dir, options):
+def open_tlog(out_dir: str | os.PathLike | None, options: dict) -> TlogWriter | None:
     """The MAVLink log of a flight in ``out_dir`` (teed to options["mavlink"]), or None without out_dir."""
     if out_dir is None:
         return None
-    from host_tools.flight.telemetry import TlogWriter
     Path(out_dir).mkdir(parents=True, exist_ok=True)
     try:
         return TlogWriter(Path(out_dir) / "flight.tlog", live_url=options["mavlink"])
@@ -92,10 +97,10 @@ def open_tlog(out_dir, options):
         raise ForaNavError("--mavlink %s: cannot open: %s" % (options["mavlink"], err))
 
 
-class FlightRecord(object):
+class FlightRecord:
     """Taps on the rig's console, events and commander: what the app did, for scoring, plots and the tlog."""
 
-    def __init__(self, pmap, rig, tlog=None):
+    def __init__(self, pmap: PlantationMap, rig: FlightRig, tlog: TlogWriter | None = None):
         self.pmap, self.rig, self.tlog = pmap, rig, tlog
         self.reached = []  # {id, deviation_m, t_s, app_tree, point}
         self.trajectory = []  # (t_ms, true x, y, est x, y, phase)
@@ -108,11 +113,11 @@ class FlightRecord(object):
         rig.cf.console.event_listeners.append(self._on_event)
         rig.cf.commander.listeners.append(self._on_setpoint)
 
-    def _on_console(self, tick, module, text):
+    def _on_console(self, tick: int, module: str, text: str) -> None:
         if self.tlog is not None:
             self.tlog.status_text(tick, "%s: %s" % (module, text))
 
-    def _on_setpoint(self, sp, priority):
+    def _on_setpoint(self, sp: setpoint_t, priority: int) -> None:
         if self.tlog is None:
             return
         tick = self.rig.now()
@@ -126,7 +131,7 @@ class FlightRecord(object):
         vx, vy = rotate(yaw, sp.velocity.x, sp.velocity.y) if sp.velocity_body else (sp.velocity.x, sp.velocity.y)
         self.tlog.position_target(tick, vx, vy, sp.position.z, sp.attitude.yaw)
 
-    def _on_event(self, tick, name, payload):
+    def _on_event(self, tick: int, name: str, payload: dict) -> None:
         if name == "detection":
             self.detections.append((payload["x"], payload["y"]))
             p = self.rig.app.params
@@ -140,7 +145,7 @@ class FlightRecord(object):
         elif name == "phase" and self.takeoff_ms is None and self.rig.app.phase != 0:
             self.takeoff_ms = tick
 
-    def _record_reached(self, tick, payload):
+    def _record_reached(self, tick: int, payload: dict) -> None:
         gx, gy = self.rig.camera_ground_point()
         nearest = min(self.pmap.trees, key=lambda t: math.hypot(t.x - gx, t.y - gy))
         distance = math.hypot(nearest.x - gx, nearest.y - gy)
@@ -148,27 +153,27 @@ class FlightRecord(object):
                              "deviation_m": round(distance, 4), "t_s": round(tick / 1000.0, 3),
                              "app_tree": payload["tree_id"], "point": (gx, gy)})
 
-    def close(self, keep=True):
+    def close(self, keep: bool = True) -> None:
         if self.tlog is not None:
             self.tlog.close(keep=keep)
             self.tlog = None
 
 
-class HideFault(object):
+class HideFault:
     """Fault: one tree hidden from the camera for hide_s, from hide_at_s or when the app first approaches it."""
 
-    def __init__(self, pmap, rig, options):
+    def __init__(self, pmap: PlantationMap, rig: FlightRig, options: dict):
         self.pmap, self.rig = pmap, rig
         self.tree, self.duration_s, self.at_s = options["hide_tree"], options["hide_s"], options["hide_at_s"]
         self.started_ms = None
         self.until_ms = None
 
-    def hidden_ids(self, now):
+    def hidden_ids(self, now: int) -> frozenset[int]:
         if self.until_ms is not None and self.started_ms <= now < self.until_ms:
             return frozenset([self.tree])
         return frozenset()
 
-    def update(self, now):
+    def update(self, now: int) -> None:
         if self.tree is None or self.started_ms is not None:
             return
         if self.at_s is not None:
@@ -185,22 +190,22 @@ class HideFault(object):
             self.until_ms = now + int(float(self.duration_s) * 1000)
 
 
-class Delivery(object):
+class Delivery:
     """Bytes due on the wire at a simulated time: a heap in time order (ties: first scheduled first)."""
 
-    def __init__(self, wire):
+    def __init__(self, wire: PtyWire):
         self.wire = wire
         self._pending = []  # (deliver_ms, seq, bytes)
         self._seq = 0
 
-    def schedule(self, deliver_ms, data):
+    def schedule(self, deliver_ms: float, data: bytes) -> None:
         heapq.heappush(self._pending, (deliver_ms, self._seq, data))
         self._seq += 1
 
-    def next_due_ms(self):
+    def next_due_ms(self) -> float | None:
         return self._pending[0][0] if self._pending else None
 
-    def deliver_due(self, now, silenced=False):
+    def deliver_due(self, now: int, silenced: bool = False) -> None:
         """Write (or, when ``silenced``, lose) every chunk due by ``now``."""
         while self._pending and self._pending[0][0] <= now:
             _, _, data = heapq.heappop(self._pending)
@@ -208,15 +213,15 @@ class Delivery(object):
                 self.wire.write(data)
 
 
-class CameraFeed(object):
+class CameraFeed:
     """The lockstep world task: the camera's frames at its frame period, the wire faults, the latency."""
 
-    def __init__(self, camera, rig, hide, options, seed):
+    def __init__(self, camera: Camera, rig: FlightRig, hide: HideFault, options: dict, seed: int):
         self.camera, self.rig, self.hide, self.options = camera, rig, hide, options
         self.rng = np.random.default_rng([seed, 0x5EED])  # harness faults, independent of camera and model
         self.delivery = Delivery(rig.wire)
 
-    def _capture(self, now):
+    def _capture(self, now: int) -> None:
         opts = self.options
         self.hide.update(now)
         lines = [line.encode("ascii", "replace") if isinstance(line, str) else bytes(line)
@@ -236,11 +241,11 @@ class CameraFeed(object):
         elif data:
             self.delivery.schedule(deliver, data)
 
-    def _silenced(self, now):
+    def _silenced(self, now: int) -> bool:
         return any(start * 1000.0 <= now < (start + duration) * 1000.0
                    for start, duration in self.options["silence"])
 
-    def task(self):
+    def task(self) -> Task:
         next_capture = 0
         while True:
             now = self.rig.now()
@@ -253,14 +258,15 @@ class CameraFeed(object):
             yield v_task_delay(wake - now)
 
 
-class Monitor(object):
+class Monitor:
     """The lowest-priority harness task: samples the trajectory, writes telemetry, reports progress and
     stops the scheduler once the app is done and the MAV has landed."""
 
-    def __init__(self, rig, record, hide, progress=None):
+    def __init__(self, rig: FlightRig, record: FlightRecord, hide: HideFault,
+                 progress: Callable[[float, str], None] | None = None):
         self.rig, self.record, self.hide, self.progress = rig, record, hide, progress
 
-    def task(self):
+    def task(self) -> Task:
         rig, record = self.rig, self.record
         while True:
             now = rig.now()
@@ -286,7 +292,7 @@ class Monitor(object):
                     rig.cf.scheduler.stop()
             yield v_task_delay(MONITOR_PERIOD_MS)
 
-    def _heartbeat(self, now, phase):
+    def _heartbeat(self, now: int, phase: int) -> None:
         state = self.rig.cf.supervisor.state
         status = {LOCKED: MAV_STATE_EMERGENCY, WARNING_LEVEL_OUT: MAV_STATE_CRITICAL}.get(
             state, MAV_STATE_ACTIVE if state not in (LANDED, "PRE_FLIGHT") else MAV_STATE_STANDBY)

@@ -1,19 +1,22 @@
 """The paper's Fig. 8: distance deviation from each reached target tree, per test, with the mean and its 95 %
 confidence interval (matplotlib, Agg, PNG)."""
-import matplotlib
+import os
+from collections.abc import Sequence
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+from pymavlink import mavutil
 
-from host_tools import fileio  # noqa: E402
-from host_tools.flight.plot import save_map_figure, show_mosaic, zoom_to_content  # noqa: E402
-from host_tools.flight.stats import mean_ci95  # noqa: E402
+from host_tools import fileio
+from host_tools.flight.plot import save_map_figure, show_mosaic, zoom_to_content
+from host_tools.flight.stats import mean_ci95
+from host_tools.maps import PlantationMap
+from host_tools.plotting import Circle, plt
+from host_tools.sim.world import World
 
 PAPER_BOUND_M = 0.10  # the paper: mean deviation below 0.1 m in every test
 POINT_SPREAD = 0.18  # horizontal jitter of the per-tree points, deterministic (by rank)
 
 
-def deviations_by_test(results):
+def deviations_by_test(results: Sequence[dict]) -> list[tuple[int, list[float]]]:
     """[(test number, [deviation of each reached target, m])] from paper-test result entries."""
     out = []
     for entry in results:
@@ -22,7 +25,8 @@ def deviations_by_test(results):
     return out
 
 
-def plot_deviation(results, path, title="Distance deviation from the target trees (simulated Tests 1-9)"):
+def plot_deviation(results: Sequence[dict], path: str | os.PathLike,
+                   title: str = "Distance deviation from the target trees (simulated Tests 1-9)") -> None:
     """Write the Fig. 8-style plot of ``results`` (entries with "test", "targets", "reached") to ``path``."""
     data = deviations_by_test(results)
     fig, ax = plt.subplots(figsize=(8, 4.2), dpi=110)
@@ -51,8 +55,7 @@ def plot_deviation(results, path, title="Distance deviation from the target tree
     ax.grid(True, axis="y", linewidth=0.3)
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=3, fontsize=8, frameon=False)
     fig.tight_layout()
-    with fileio.atomic_path(path) as tmp:
-        fig.savefig(tmp)
+    fileio.write_figure(fig, path)
     plt.close(fig)
 
 
@@ -60,10 +63,8 @@ TRACK_COLOURS = ("#1565c0", "#6a1b9a", "#00838f")
 TREE_COLOURS = {"reached": "#2e7d32", "missed": "#ef6c00", "non_target": "#9e9e9e", "visited_non_target": "#d32f2f"}
 
 
-def read_ground_truth_track(tlog_path):
+def read_ground_truth_track(tlog_path: str | os.PathLike) -> list[tuple[float, float]]:
     """[(x, y)] of the MAV's true position (the tlog's DEBUG_VECT "gt_pos", NED -> Crazyflie FLU)."""
-    from pymavlink import mavutil
-
     log = mavutil.mavlink_connection(str(tlog_path), dialect="common")
     track = []
     try:
@@ -77,7 +78,8 @@ def read_ground_truth_track(tlog_path):
         log.close()
 
 
-def plot_map_tests(pmap, entries, tracks, path, world=None):
+def plot_map_tests(pmap: PlantationMap, entries: Sequence[dict], tracks: Sequence[Sequence[tuple[float, float]]],
+                   path: str | os.PathLike, world: World | None = None) -> None:
     """The paper's Figs. 6-7: one map with the flown trajectories of its tests overlaid.
 
     ``entries``: the tests' summaries (with "test", "reached", "missed_targets", "non_targets_visited");
@@ -85,8 +87,6 @@ def plot_map_tests(pmap, entries, tracks, path, world=None):
     orange when one missed it; a non-target is red when some test visited it. ``world`` (with photo crowns):
     its mosaic is drawn under the map, the trees outlined.
     """
-    from matplotlib.patches import Circle
-
     missed = {i for e in entries for i in e["missed_targets"]}
     visited_non_targets = {i for e in entries for i in e["non_targets_visited"]}
     fig, ax = plt.subplots(figsize=(8, 3.9), dpi=110)

@@ -46,7 +46,9 @@ harness as a picklable function of plain data, for sweeps. The components live i
 camera and app registries and the options in ``flight.registry``, the scoring in ``flight.summary``; this
 module re-exports their public names.
 """
+import os
 import time
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 from host_tools import fileio
@@ -57,12 +59,15 @@ from host_tools.flight.components import (  # noqa: F401  (the harness's public 
     REACHED_MATCH_RADIUS_M, TELEMETRY_PERIOD_MS, TRAJECTORY_PERIOD_MS, WORLD_TASK_PRI, CameraFeed, Delivery,
     FlightRecord, FlightRig, HideFault, Monitor, open_tlog)
 from host_tools.flight.registry import (  # noqa: F401
-    CAMERA_MODULES, DEFAULT_OPTIONS, app_factory, app_names, camera_factory, check_options, register_app,
+    CAMERA_MODULES, DEFAULT_OPTIONS, Camera, app_factory, app_names, camera_factory, check_options, register_app,
     register_camera)
 from host_tools.flight.summary import summarize
+from host_tools.maps import PlantationMap, map_from_dict
+
+Progress = Callable[[float, str], None]  # progress(t_s, phase name), about once a simulated second
 
 
-class Flight(object):
+class Flight:
     """One flight, composed: rig + record (+ tlog) + hide fault + monitor; the world task is pluggable.
 
     ``world_task`` (a generator run at WORLD_TASK_PRI) defaults to the camera feed (CameraFeed); realtime
@@ -70,7 +75,8 @@ class Flight(object):
     nothing is left behind once it is closed.
     """
 
-    def __init__(self, pmap, camera, *, seed=0, out_dir=None, options=None, progress=None):
+    def __init__(self, pmap: PlantationMap, camera: Camera, *, seed: int = 0, out_dir: str | os.PathLike | None = None,
+                 options: dict | None = None, progress: Progress | None = None):
         self.options = check_options(options)
         self.pmap, self.camera, self.seed, self.progress = pmap, camera, seed, progress
         self.out_dir = Path(out_dir) if out_dir is not None else None
@@ -93,7 +99,7 @@ class Flight(object):
     detections = property(lambda self: self.record.detections)
     app_trees = property(lambda self: self.record.app_trees)
 
-    def run(self, world_task=None):
+    def run(self, world_task: Iterator | None = None) -> None:
         cf = self.rig.cf
         cf.x_task_create(world_task if world_task is not None else self.feed.task(), "HARNESS_CAMERA",
                          WORLD_TASK_PRI)
@@ -103,16 +109,17 @@ class Flight(object):
         cf.run_until(int(float(self.options["max_time_s"]) * 1000) + 1)
         self.cpu_s = time.process_time() - cpu0
 
-    def close(self, keep=True):
+    def close(self, keep: bool = True) -> None:
         self.rig.close()
         self.record.close(keep=keep)
 
-    def summary(self):
+    def summary(self) -> dict:
         return summarize(self)
 
-    def write_outputs(self, summary):
+    def write_outputs(self, summary: dict) -> None:
         """flight.tlog is already there; add trajectory.png, summary.json (and the camera's detections.csv)."""
-        from host_tools.flight.plot import plot_trajectory
+        from host_tools.flight.plot import plot_trajectory  # matplotlib: loaded only by a flight that draws
+
         summary["tlog"] = str(self.out_dir / "flight.tlog")
         summary["plot"] = str(self.out_dir / "trajectory.png")
         summary["summary"] = str(self.out_dir / "summary.json")
@@ -123,7 +130,8 @@ class Flight(object):
         fileio.write_json(summary["summary"], {k: v for k, v in summary.items() if k != "cpu_s"})
 
 
-def run_flight(pmap, camera, *, seed=0, out_dir=None, options=None, progress=None):
+def run_flight(pmap: PlantationMap, camera: Camera, *, seed: int = 0, out_dir: str | os.PathLike | None = None,
+               options: dict | None = None, progress: Progress | None = None) -> dict:
     """Fly ``pmap`` with the app against ``camera``; return the summary dict (see module docstring).
 
     With ``out_dir``, writes flight.tlog, trajectory.png and summary.json there and adds their paths.
@@ -144,7 +152,8 @@ def run_flight(pmap, camera, *, seed=0, out_dir=None, options=None, progress=Non
     return summary
 
 
-def fly(map_data, *, camera="oracle", camera_kwargs=None, app="python", options=None, seed=0):
+def fly(map_data: dict, *, camera: str = "oracle", camera_kwargs: dict | None = None, app: str = "python",
+        options: dict | None = None, seed: int = 0) -> dict:
     """The harness as a function: (map, camera, app, options, seed) -> summary, from plain data only.
 
     ``map_data`` is a map JSON object (host_tools.maps), ``camera`` a registered camera name built with
@@ -152,8 +161,6 @@ def fly(map_data, *, camera="oracle", camera_kwargs=None, app="python", options=
     arguments by value); every object of the flight is built here and dropped on return, so a worker can
     fly thousands in a row. Same arguments, same summary (apart from ``cpu_s``).
     """
-    from host_tools.maps import map_from_dict
-
     pmap = map_from_dict(map_data, source=map_data.get("name", "<map>"))
     try:
         cam = camera_factory(camera)(pmap, seed=seed, **(camera_kwargs or {}))

@@ -7,8 +7,11 @@ standardized coordinates (with Gaussian pixel noise and an independent dropout p
 ``MARK STOP``. It detects *species*, not the planting-column rule: an oil palm outside the column is reported
 too, and the app must ignore it. Camera model and frames as in docs/DESIGN.md.
 """
+from collections.abc import Collection, Sequence
+
 import numpy as np
 
+from host_tools.maps import PlantationMap, Tree
 from host_tools.sim.camera import CameraModel, Pose
 from jevois_module.ForaNavTrees import foranav_serial
 
@@ -17,10 +20,11 @@ DEFAULT_LATENCY_MS = 50
 DEFAULT_PIXEL_NOISE_PX = 1.5
 
 
-class OracleCamera(object):
-    def __init__(self, pmap, *, seed=0, frame_period_ms=DEFAULT_FRAME_PERIOD_MS, latency_ms=DEFAULT_LATENCY_MS,
-                 pixel_noise_px=DEFAULT_PIXEL_NOISE_PX, dropout=0.0, width=352, height=288,
-                 mount_offset=(0.0, 0.0), frame_marks=True):
+class OracleCamera:
+    def __init__(self, pmap: PlantationMap, *, seed: int = 0, frame_period_ms: int = DEFAULT_FRAME_PERIOD_MS,
+                 latency_ms: int = DEFAULT_LATENCY_MS, pixel_noise_px: float = DEFAULT_PIXEL_NOISE_PX,
+                 dropout: float = 0.0, width: int = 352, height: int = 288,
+                 mount_offset: tuple[float, float] = (0.0, 0.0), frame_marks: bool = True):
         if not 0.0 <= dropout <= 1.0:
             raise ValueError("dropout must be in [0, 1], got %r" % dropout)
         if frame_period_ms <= 0 or latency_ms < 0:
@@ -37,14 +41,15 @@ class OracleCamera(object):
         self.trees = [t for t in pmap.trees if t.species == pmap.target_species]
         self._rng = np.random.default_rng(seed)
 
-    def ground_point(self, true_pose):
+    def ground_point(self, true_pose: Sequence[float]) -> tuple[float, float]:
         return self.camera.ground_point(Pose(*true_pose))
 
-    def project(self, tree_x, tree_y, true_pose):
+    def project(self, tree_x: float, tree_y: float, true_pose: Sequence[float]) -> tuple[float, float]:
         """Pixel (u, v) of a ground point seen from ``true_pose`` (x, y, z, yaw_deg)."""
         return self.camera.world_to_pixel(Pose(*true_pose), tree_x, tree_y)
 
-    def visible(self, true_pose, hidden=frozenset()):
+    def visible(self, true_pose: Sequence[float],
+                hidden: Collection[int] = frozenset()) -> list[tuple[Tree, float, float]]:
         """(tree, u, v) for each target-species tree whose whole crown is in the frame."""
         z = true_pose[2]
         if z <= 0.05:
@@ -59,7 +64,7 @@ class OracleCamera(object):
                 out.append((tree, u, v))
         return out
 
-    def capture(self, t_ms, true_pose, hidden=frozenset()):
+    def capture(self, t_ms: int, true_pose: Sequence[float], hidden: Collection[int] = frozenset()) -> list[str]:
         lines = []
         for tree, u, v in self.visible(true_pose, hidden):
             # draw both random numbers for every tree so dropout does not shift the noise sequence

@@ -19,10 +19,16 @@ import concurrent.futures
 import multiprocessing
 import os
 import time
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from host_tools import fileio
+from host_tools.flight.figures import plot_deviation, plot_map_tests, read_ground_truth_track
+from host_tools.flight.vision_camera import fly_with_vision
+from host_tools.maps import load_map
+from host_tools.sim.crowns import AppearanceSpec, load_appearance
+from host_tools.sim.world import World
 
 MAX_MEAN_DEVIATION_M = 0.10  # the paper's figure (Fig. 8)
 AIM_MEAN_DEVIATION_M = 0.05
@@ -53,7 +59,7 @@ PAPER_TESTS = (
 )
 
 
-def criteria(summary):
+def criteria(summary: dict) -> dict[str, bool]:
     """{criterion: passed} of one flight summary: the paper's success conditions."""
     mean = summary["mean_deviation_m"]
     return {
@@ -65,18 +71,16 @@ def criteria(summary):
     }
 
 
-def passed(summary):
+def passed(summary: dict) -> bool:
     return all(criteria(summary).values())
 
 
-def fly_test(test, out_dir=None, map_path=None, camera_kwargs=None, app="python"):
+def fly_test(test: PaperTest, out_dir: str | os.PathLike | None = None, map_path: str | None = None,
+             camera_kwargs: dict | None = None, app: str = "python") -> dict:
     """Fly one PaperTest -> the fly summary plus "test", "map", "situation", "passed", "wall_s".
 
     ``camera_kwargs``: extra VisionCamera arguments (appearance, model) from the command line; ``app``: the
     flight app, 'python' or 'c' (harness option ``app``)."""
-    from host_tools.flight.vision_camera import fly_with_vision
-    from host_tools.maps import load_map
-
     pmap = load_map(map_path or test.map)
     started = time.monotonic()
     options = {"max_time_s": MAX_TIME_S, "app": app}
@@ -89,7 +93,9 @@ def fly_test(test, out_dir=None, map_path=None, camera_kwargs=None, app="python"
     return summary
 
 
-def run_tests(tests=PAPER_TESTS, out_dir=None, jobs=None, on_result=None, camera_kwargs=None, app="python"):
+def run_tests(tests: Sequence[PaperTest] = PAPER_TESTS, out_dir: str | os.PathLike | None = None,
+              jobs: int | None = None, on_result: Callable[[dict], None] | None = None,
+              camera_kwargs: dict | None = None, app: str = "python") -> list[dict]:
     """Fly ``tests`` (in test order in the result); ``on_result(entry)`` is called as each one finishes."""
     jobs = max(1, min(len(tests), jobs or os.cpu_count() or 1))
     # The workers are fresh interpreters (spawn): importing host_tools limits their BLAS threads before numpy.
@@ -105,11 +111,11 @@ def run_tests(tests=PAPER_TESTS, out_dir=None, jobs=None, on_result=None, camera
     return [by_number[test.number] for test in tests]
 
 
-def _fmt(value, pattern="%.3f"):
+def _fmt(value: float | None, pattern: str = "%.3f") -> str:
     return "-" if value is None else pattern % value
 
 
-def table(results):
+def table(results: Sequence[dict]) -> list[str]:
     """The results table as Markdown lines (one row per test)."""
     lines = ["| test | map | situation | targets reached | non-targets visited | mean deviation (m) | 95 % CI (m) "
              "| mission (s) | recoveries | detections/frame | result |",
@@ -126,15 +132,11 @@ def table(results):
     return lines
 
 
-def write_outputs(results, out_dir, wall_s=None, appearance=None):
+def write_outputs(results: Sequence[dict], out_dir: str | os.PathLike, wall_s: float | None = None,
+                  appearance: dict | None = None) -> dict[str, str]:
     """results.json, table.md, deviation.png (Fig. 8) and <map>_tests.png (Figs. 6-7, from the tests' tlogs)
     in ``out_dir`` -> their paths. ``appearance`` (the AppearanceSpec dict the tests flew with): the map
     figures show the world's mosaic (the photo crowns) under the trajectories."""
-    from host_tools.flight.figures import plot_deviation, plot_map_tests, read_ground_truth_track
-    from host_tools.maps import load_map
-    from host_tools.sim.crowns import AppearanceSpec, load_appearance
-    from host_tools.sim.world import World
-
     look = load_appearance(AppearanceSpec.from_dict(appearance)) if appearance else None
 
     out_dir = Path(out_dir)

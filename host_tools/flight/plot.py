@@ -1,18 +1,21 @@
 """The trajectory plot of a flight (matplotlib, Agg): map trees, path F, flown trajectory, detections."""
-import matplotlib
+import os
+from typing import TYPE_CHECKING, Any
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-from matplotlib.patches import Circle  # noqa: E402
+from crazyflie_app.navigation_core import PHASE_RECOVERY
+from host_tools import fileio
+from host_tools.maps import PlantationMap
+from host_tools.plotting import Circle, plt
+from host_tools.sim.world import World
 
-from crazyflie_app.navigation_core import PHASE_RECOVERY  # noqa: E402
-from host_tools import fileio  # noqa: E402
+if TYPE_CHECKING:  # the harness imports this module when a flight draws
+    from host_tools.flight.harness import Flight
 
 COLOURS = {"target": "#2e7d32", "non_target": "#9e9e9e", "reached": "#1565c0", "recovery": "#d32f2f",
            "path": "#555555", "truth": "#1565c0", "estimate": "#90caf9", "app_tree": "#ff8f00"}
 
 
-def plot_trajectory(flight, path):
+def plot_trajectory(flight: "Flight", path: str | os.PathLike) -> None:
     """Draw ``flight`` (a harness Flight after its run) into the PNG ``path`` (atomic write)."""
     pmap = flight.pmap
     fig, ax = plt.subplots(figsize=(8, 3.6), dpi=110)
@@ -59,7 +62,7 @@ def plot_trajectory(flight, path):
     save_map_figure(fig, ax, pmap.name.split(":")[0] + " - seed %d" % flight.seed, path)
 
 
-def show_mosaic(ax, world, level=None):
+def show_mosaic(ax: Any, world: World, level: int | None = None) -> None:
     """Draw a World's orthomosaic under a top-down plot (x right, y up, metres).
 
     Mosaic rows run along -x and columns along -y (host_tools/sim/world.py): transposed and mirrored for the plot.
@@ -71,7 +74,7 @@ def show_mosaic(ax, world, level=None):
               interpolation="bilinear", zorder=0)
 
 
-def zoom_to_content(ax, pmap, margin_m=0.4):
+def zoom_to_content(ax: Any, pmap: PlantationMap, margin_m: float = 0.4) -> None:
     """Limits around the path, trees and objects (the mosaic reaches a camera footprint beyond them)."""
     xs = [p[0] for p in pmap.waypoints] + [t.x for t in pmap.trees] + [o.x for o in pmap.objects]
     ys = [p[1] for p in pmap.waypoints] + [t.y for t in pmap.trees] + [o.y for o in pmap.objects]
@@ -79,7 +82,7 @@ def zoom_to_content(ax, pmap, margin_m=0.4):
     ax.set_ylim(min(ys) - margin_m, max(ys) + margin_m)
 
 
-def save_map_figure(fig, ax, title, path):
+def save_map_figure(fig: Any, ax: Any, title: str, path: str | os.PathLike) -> None:
     """Finish a top-down map plot (metres, equal axes, legend outside) and write it atomically."""
     ax.set_aspect("equal")
     ax.set_xlabel("x (m, forward)")
@@ -88,6 +91,5 @@ def save_map_figure(fig, ax, title, path):
     ax.grid(True, linewidth=0.3)
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7)
     fig.tight_layout()
-    with fileio.atomic_path(path) as tmp:
-        fig.savefig(tmp)
+    fileio.write_figure(fig, path)
     plt.close(fig)

@@ -27,11 +27,14 @@ import subprocess
 import sys
 import threading
 import time
+from dataclasses import dataclass
 
 from crazyflie_app.firmware import v_task_delay
 from host_tools.errors import ForaNavError
 from host_tools.flight import harness
-from host_tools.maps import map_from_dict, map_to_dict
+from host_tools.flight.vision_camera import (DEFAULT_FRAME_PERIOD_MS, DEFAULT_LATENCY_FRAMES, VisionCamera,
+                                             parse_detections, truth_in_frame)
+from host_tools.maps import PlantationMap, map_from_dict, map_to_dict
 from jevois_module.ForaNavTrees import foranav_serial
 
 POSE_PERIOD_MS = 10  # simulated ms between pose messages and between wall-clock pacing points
@@ -40,14 +43,14 @@ STOP_TIMEOUT_S = 5.0
 UNSUPPORTED_OPTIONS = ("silence", "garbage_rate", "partial_rate", "dropout")  # lockstep-only wire faults
 
 
-class _CameraSpec(object):
+@dataclass(frozen=True)
+class _CameraSpec:
     """What the flight side knows of the remote camera: its timing (the app is told the latency)."""
+    frame_period_ms: int
+    latency_ms: int
 
-    def __init__(self, frame_period_ms, latency_ms):
-        self.frame_period_ms, self.latency_ms = int(frame_period_ms), int(latency_ms)
 
-
-class _RealtimePacer(object):
+class _RealtimePacer:
     """The realtime world task: paces simulated time to the wall clock and feeds the camera process poses."""
 
     def __init__(self, flight, speed, kill_camera_at_s):
@@ -123,8 +126,9 @@ def _stop_camera_process(process):
     return None
 
 
-def run_realtime(pmap, *, seed=0, speed=1.0, out_dir=None, options=None, kill_camera_at_s=None,
-                 camera_kwargs=None, progress=None):
+def run_realtime(pmap: PlantationMap, *, seed: int = 0, speed: float = 1.0, out_dir: str | os.PathLike | None = None,
+                 options: dict | None = None, kill_camera_at_s: float | None = None, camera_kwargs: dict | None = None,
+                 progress: harness.Progress | None = None) -> dict:
     """Fly ``pmap`` with the camera in its own process (see the module docstring) -> summary dict."""
     if not speed > 0:
         raise ForaNavError("--speed: must be positive, got %r" % speed)
@@ -136,7 +140,6 @@ def run_realtime(pmap, *, seed=0, speed=1.0, out_dir=None, options=None, kill_ca
         # the module writes straight into the pty there: nothing between it and the wire to add noise
         raise ForaNavError("--realtime: --pixel-noise is a lockstep fault (not with --realtime)")
     options["lockstep"] = False  # bytes arrive when the camera process sends them
-    from host_tools.flight.vision_camera import DEFAULT_FRAME_PERIOD_MS, DEFAULT_LATENCY_FRAMES
 
     kwargs = dict(camera_kwargs or {})
     period = int(kwargs.get("frame_period_ms", DEFAULT_FRAME_PERIOD_MS))
@@ -195,7 +198,7 @@ def _after_camera_loss(flight):
 
 # -- the camera process -------------------------------------------------------------------------------------------
 
-class _PoseFeed(object):
+class _PoseFeed:
     """The latest pose line from stdin (a reader thread); ``ended`` once the flight side closed it."""
 
     def __init__(self, stream):
@@ -215,7 +218,7 @@ class _PoseFeed(object):
         self.ended.set()
 
 
-def camera_process_main(argv=None):
+def camera_process_main(argv: list[str] | None = None) -> int:
     """Entry of the camera process: map JSON on the first stdin line, then poses; module output to --fd."""
     parser = argparse.ArgumentParser(description="ForaNav realtime camera process (started by --realtime)")
     parser.add_argument("--fd", type=int, required=True)
@@ -223,7 +226,6 @@ def camera_process_main(argv=None):
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--camera", default="{}")
     args = parser.parse_args(argv)
-    from host_tools.flight.vision_camera import VisionCamera
 
     stdin = sys.stdin.buffer
     pmap = map_from_dict(json.loads(stdin.readline().decode("utf-8")), source="<realtime>")
@@ -262,12 +264,10 @@ def camera_process_main(argv=None):
 
 
 def _pixels(lines, camera):
-    from host_tools.flight.vision_camera import parse_detections
     return parse_detections(lines, camera.camera.width, camera.camera.height)
 
 
 def _truth(frame, pmap):
-    from host_tools.flight.vision_camera import truth_in_frame
     return truth_in_frame(frame.trees, pmap.target_species)
 
 

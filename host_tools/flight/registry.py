@@ -3,7 +3,11 @@ flight apps (``register_app``: the Python app and the C core, both reading the e
 flight options (``DEFAULT_OPTIONS``, checked by ``check_options``). Re-exported by ``host_tools.flight.harness``.
 """
 import importlib
+from collections.abc import Callable, Sequence
+from typing import Any, Protocol
 
+from crazyflie_app.c_app import CNavigationApp  # the C core's library is loaded (built if stale) on first use
+from crazyflie_app.firmware import Crazyflie
 from crazyflie_app.navigation import NavigationApp
 from crazyflie_app.uart2_link import Uart2Link
 from host_tools.errors import ForaNavError
@@ -13,17 +17,31 @@ DEFAULT_OPTIONS = {
     "partial_rate": 0.0, "lockstep": True, "max_time_s": 900.0, "model": None, "params": None, "start": None,
     "mavlink": None, "decks": ("bcFlow2", "bcLoco"), "app": "python",
 }
-_CAMERAS = {}
+
+
+class Camera(Protocol):
+    """What the harness asks of a camera (see the harness docstring); ``mount_offset`` is optional."""
+
+    frame_period_ms: int
+    latency_ms: int
+
+    def capture(self, t_ms: int, true_pose: tuple[float, float, float, float],
+                hidden: frozenset[int] = frozenset()) -> list[str]: ...
+
+
+CameraFactory = Callable[..., Camera]  # (pmap, seed=..., **camera_kwargs) -> a camera
+AppFactory = Callable[[Crazyflie, Sequence, str | None], Any]  # (cf, waypoints, target_label) -> an app
+_CAMERAS: dict[str, CameraFactory] = {}
 # cameras that live in their own module, imported on first use; the module calls register_camera()
 CAMERA_MODULES = {"sim": "host_tools.flight.vision_camera"}
 
 
-def register_camera(name, factory):
+def register_camera(name: str, factory: CameraFactory) -> None:
     """Make ``foranav fly --camera NAME`` available: factory(pmap, seed=..., **kwargs) -> camera object."""
     _CAMERAS[name] = factory
 
 
-def camera_factory(name):
+def camera_factory(name: str) -> CameraFactory:
     """The factory registered for ``name``, importing its module first if it has one (see CAMERA_MODULES)."""
     if name not in _CAMERAS and name in CAMERA_MODULES:
         try:
@@ -39,7 +57,7 @@ def camera_factory(name):
     return _CAMERAS[name]
 
 
-def check_options(options):
+def check_options(options: dict | None) -> dict:
     """``options`` merged over DEFAULT_OPTIONS, checked (ForaNavError names the bad one)."""
     merged = dict(DEFAULT_OPTIONS)
     for key, value in (options or {}).items():
@@ -56,19 +74,18 @@ def check_options(options):
 
 # -- the app: a component the flight is composed with -----------------------------------------------------------
 
-def _python_app(cf, waypoints, target_label):
+def _python_app(cf: Crazyflie, waypoints: Sequence, target_label: str | None) -> NavigationApp:
     return NavigationApp(cf, waypoints, None, link=Uart2Link(cf), target_label=target_label)
 
 
-def _c_app(cf, waypoints, target_label):
-    from crazyflie_app.c_app import CNavigationApp  # loads (and if stale, builds) the C core's shared library
+def _c_app(cf: Crazyflie, waypoints: Sequence, target_label: str | None) -> CNavigationApp:
     return CNavigationApp(cf, waypoints, target_label=target_label)
 
 
 _APPS = {"python": _python_app, "c": _c_app}
 
 
-def register_app(name, factory):
+def register_app(name: str, factory: AppFactory) -> None:
     """Make flight option ``app=NAME`` available.
 
     ``factory(cf, waypoints, target_label) -> app``, ``cf`` with the camera's wire attached to its emulated
@@ -82,11 +99,11 @@ def register_app(name, factory):
     _APPS[name] = factory
 
 
-def app_names():
+def app_names() -> list[str]:
     return sorted(_APPS)
 
 
-def app_factory(name):
+def app_factory(name: str) -> AppFactory:
     if name not in _APPS:
         raise ForaNavError("flight option app: unknown app %r (have %s)" % (name, ", ".join(app_names())))
     return _APPS[name]

@@ -22,7 +22,9 @@ from crazyflie_app.navigation_core import PHASE_FOLLOW_PATH, PHASE_NAMES, rotate
 from host_tools.errors import ForaNavError
 from host_tools.flight import harness
 from host_tools.flight.vision_camera import DetectionScore, parse_detections, truth_in_frame
-from host_tools.maps import map_from_dict
+from host_tools.jevois_host import ModuleRunner, NullLog
+from host_tools.maps import PlantationMap, map_from_dict
+from host_tools.sim.clip import Clip
 
 POLL_MS = 10
 END_MARGIN_MS = 500  # run this long after the last frame's lines arrived
@@ -30,7 +32,7 @@ TREE_MATCH_RADIUS_M = 0.3  # an app tree farther than this from every map tree m
 SETPOINT_SAMPLE_MS = 100
 
 
-class _PlaybackModel(object):
+class _PlaybackModel:
     """Stands in for the MAV model: truth and estimate are the recorded pose at the playback time."""
 
     def __init__(self, model, frames, clock):
@@ -61,7 +63,7 @@ class _PlaybackModel(object):
         self.pose_at(self._clock())
 
 
-class _ClipPlayer(object):
+class _ClipPlayer:
     """The replay's world task and taps: plays the clip's frames through the module into the flight's wire,
     drives the MAV model from the recorded poses and samples the setpoints the app sends."""
 
@@ -120,21 +122,19 @@ class _ClipPlayer(object):
         yield v_task_delay(POLL_MS)
 
 
-class _ClipCamera(object):
+class _ClipCamera:
     """The module runner and the timing of the replay (the harness reads frame period and latency)."""
 
     def __init__(self, clip, pmap, latency_ms, module_params=None):
-        from host_tools.flight.vision_camera import _NullLog
-        from host_tools.jevois_host import ModuleRunner
-
         self.frame_period_ms = int(round(1000.0 / clip.fps))
         self.latency_ms = self.frame_period_ms if latency_ms is None else int(latency_ms)
         params = {"species": pmap.target_species}
         params.update(module_params or {})
-        self.runner = ModuleRunner(params=params, log_stream=_NullLog())
+        self.runner = ModuleRunner(params=params, log_stream=NullLog())
 
 
-def replay_clip(clip, pmap=None, *, latency_ms=None, seed=0, params=None, app="python"):
+def replay_clip(clip: Clip, pmap: PlantationMap | None = None, *, latency_ms: int | None = None, seed: int = 0,
+                params: dict | None = None, app: str = "python") -> dict:
     """Play ``clip`` (host_tools.sim.clip.Clip) through the module and the app -> the report dict."""
     if pmap is None:
         if clip.map is None:
@@ -227,7 +227,7 @@ def _phase_durations(setpoints):
     return out
 
 
-def expectation_record(report):
+def expectation_record(report: dict) -> dict:
     """The figures of a replay report that CI pins (tests/fixtures/replay_expectations/<clip>.json)."""
     det = report["detection"] or {}
     return {

@@ -1,5 +1,6 @@
 """Small statistics for flight summaries (no scipy): mean and the 95 % confidence half-width of the mean."""
 import math
+from collections.abc import Sequence
 
 # two-sided 95 % quantiles of Student's t (0.975 one-sided), by degrees of freedom
 _T975 = {1: 12.706, 2: 4.303, 3: 3.182, 4: 2.776, 5: 2.571, 6: 2.447, 7: 2.365, 8: 2.306, 9: 2.262, 10: 2.228,
@@ -8,7 +9,7 @@ _T975 = {1: 12.706, 2: 4.303, 3: 3.182, 4: 2.776, 5: 2.571, 6: 2.447, 7: 2.365, 
          29: 2.045, 30: 2.042, 40: 2.021, 60: 2.000, 120: 1.980}
 
 
-def t_quantile_975(dof):
+def t_quantile_975(dof: int) -> float:
     """t_{0.975, dof}: exact table values, linear in 1/dof between them, 1.960 in the limit."""
     if dof < 1:
         raise ValueError("degrees of freedom must be >= 1")
@@ -25,7 +26,7 @@ def t_quantile_975(dof):
     return t_lo + w * (t_hi - t_lo)
 
 
-def mean_ci95(values):
+def mean_ci95(values: Sequence[float]) -> tuple[float | None, float | None]:
     """(mean, 95 % CI half-width) of a sample; half-width None below two values, mean None if empty."""
     n = len(values)
     if n == 0:

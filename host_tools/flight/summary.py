@@ -1,12 +1,16 @@
 """Scoring of a finished flight: the summary record ``foranav fly`` prints and the sweeps store."""
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from crazyflie_app.firmware.supervisor import LOCKED
 from crazyflie_app.navigation_core import PHASE_DONE, PHASE_NO_CAMERA
 from host_tools.flight.stats import mean_ci95
 
+if TYPE_CHECKING:  # the harness imports this module
+    from host_tools.flight.harness import Flight
 
-def summarize(flight):
+
+def summarize(flight: "Flight") -> dict:
     """The flight summary (the record fly prints and sweeps store) of a finished Flight."""
     rig, record, pmap = flight.rig, flight.record, flight.pmap
     targets = sorted(t.id for t in pmap.targets)

@@ -15,8 +15,10 @@ height, target_num = tree id), STATUSTEXT per console line (split into 50-charac
 import math
 import os
 import struct
+from typing import Any, BinaryIO
 
 os.environ.setdefault("MAVLINK20", "1")
+from pymavlink import mavutil  # noqa: E402
 from pymavlink.dialects.v20 import common as mavlink2  # noqa: E402
 
 EPOCH_US = 1741132800 * 1000000  # 2025-03-05T00:00:00Z: a fixed origin keeps the bytes reproducible
@@ -25,28 +27,27 @@ TYPE_MASK_HOVER = 2531  # use vx, vy, z, yaw (crazyflie.md 6.5)
 STATUSTEXT_CHUNK = 50
 
 
-class _TimestampedFile(object):
+class _TimestampedFile:
     """The file object MAVLink.send writes to: prefixes each frame with the simulated-time header."""
 
-    def __init__(self, fileobj, live=None):
+    def __init__(self, fileobj: BinaryIO, live: Any = None):
         self.fileobj = fileobj
         self.live = live
         self.t_us = EPOCH_US
 
-    def write(self, buf):
+    def write(self, buf: bytes) -> None:
         self.fileobj.write(struct.pack(">Q", self.t_us) + bytes(buf))
         if self.live is not None:
             self.live.write(bytes(buf))
 
 
-class TlogWriter(object):
+class TlogWriter:
     """Write telemetry; every method takes the simulated time in ms."""
 
-    def __init__(self, path, live_url=None):
+    def __init__(self, path: str | os.PathLike, live_url: str | None = None):
         self.path = str(path)
         live = None
         if live_url:  # first: a bad URL must fail before any file exists
-            from pymavlink import mavutil
             live = mavutil.mavlink_connection(live_url, source_system=SYSTEM_ID, source_component=COMPONENT_ID,
                                               dialect="common")
         self._live = live
@@ -57,11 +58,11 @@ class TlogWriter(object):
         self._status_id = 0
         self.messages = 0
 
-    def _at(self, t_ms):
+    def _at(self, t_ms: int) -> None:
         self._sink.t_us = EPOCH_US + int(t_ms) * 1000
         self.messages += 1
 
-    def heartbeat(self, t_ms, phase, armed, system_status):
+    def heartbeat(self, t_ms: int, phase: int, armed: bool, system_status: int) -> None:
         self._at(t_ms)
         base_mode = mavlink2.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | mavlink2.MAV_MODE_FLAG_GUIDED_ENABLED
         if armed:
@@ -69,21 +70,22 @@ class TlogWriter(object):
         self.mav.heartbeat_send(mavlink2.MAV_TYPE_QUADROTOR, mavlink2.MAV_AUTOPILOT_GENERIC, base_mode,
                                 int(phase), system_status)
 
-    def local_position(self, t_ms, x, y, z, vx, vy, vz):
+    def local_position(self, t_ms: int, x: float, y: float, z: float, vx: float, vy: float, vz: float) -> None:
         self._at(t_ms)
         self.mav.local_position_ned_send(int(t_ms), x, -y, -z, vx, -vy, -vz)
 
-    def ground_truth(self, t_ms, x, y, z):
+    def ground_truth(self, t_ms: int, x: float, y: float, z: float) -> None:
         self._at(t_ms)
         self.mav.debug_vect_send(b"gt_pos", EPOCH_US + int(t_ms) * 1000, x, -y, -z)
 
-    def position_target(self, t_ms, vx_world, vy_world, z, yaw_deg):
+    def position_target(self, t_ms: int, vx_world: float, vy_world: float, z: float, yaw_deg: float) -> None:
         self._at(t_ms)
         self.mav.position_target_local_ned_send(int(t_ms), mavlink2.MAV_FRAME_LOCAL_NED, TYPE_MASK_HOVER,
                                                 0.0, 0.0, -z, vx_world, -vy_world, 0.0, 0.0, 0.0, 0.0,
                                                 -math.radians(yaw_deg), 0.0)
 
-    def landing_target(self, t_ms, tree_id, u, v, width, height, focal_px, distance_m):
+    def landing_target(self, t_ms: int, tree_id: int, u: float, v: float, width: int, height: int, focal_px: float,
+                       distance_m: float) -> None:
         self._at(t_ms)
         angle_x = math.atan((u - width / 2.0) / focal_px)  # + = right of centre (+y FRD)
         angle_y = math.atan((v - height / 2.0) / focal_px)  # + = towards the tail
@@ -91,7 +93,7 @@ class TlogWriter(object):
                                      mavlink2.MAV_FRAME_BODY_FRD, angle_x, angle_y, distance_m, 0.0, 0.0,
                                      type=mavlink2.LANDING_TARGET_TYPE_VISION_OTHER, position_valid=0)
 
-    def status_text(self, t_ms, text, severity=mavlink2.MAV_SEVERITY_INFO):
+    def status_text(self, t_ms: int, text: str, severity: int = mavlink2.MAV_SEVERITY_INFO) -> None:
         data = text.encode("ascii", "replace")
         chunks = [data[i:i + STATUSTEXT_CHUNK] for i in range(0, len(data), STATUSTEXT_CHUNK)] or [b""]
         self._status_id = self._status_id % 65535 + 1 if len(chunks) > 1 else 0
@@ -99,7 +101,7 @@ class TlogWriter(object):
             self._at(t_ms)
             self.mav.statustext_send(severity, chunk, id=self._status_id, chunk_seq=seq)
 
-    def close(self, keep=True):
+    def close(self, keep: bool = True) -> None:
         """Finish the log (keep=True: rename it into place; False: delete the partial file)."""
         if self._file is not None:
             self._file.close()

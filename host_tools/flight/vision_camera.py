@@ -22,15 +22,20 @@ totals (detections per frame, true/false positives, misses, pixel error) for the
 """
 import dataclasses
 import math
+import os
+from collections.abc import Collection, Iterable, Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from host_tools.errors import ForaNavError
-from host_tools.flight.harness import register_camera
+from host_tools.flight.harness import Progress, register_camera, run_flight
+from host_tools.jevois_host import ModuleRunner, NullLog
+from host_tools.maps import PlantationMap, Tree
 from host_tools.sim.camera import CameraModel, Pose
 from host_tools.sim.crowns import AppearanceSpec, load_appearance
-from host_tools.sim.world import NO_EFFECTS, SENSOR_EFFECTS, World
+from host_tools.sim.world import NO_EFFECTS, SENSOR_EFFECTS, Frame, TreeInView, World
 from jevois_module.ForaNavTrees import foranav_serial
 
 import foranav_model  # noqa: E402  (the camera's own module: jevois_module.ForaNavTrees put it on sys.path)
@@ -42,10 +47,11 @@ EFFECTS = {"none": NO_EFFECTS, "sensor": SENSOR_EFFECTS}
 DEFAULT_EFFECTS = "sensor"
 MATCH_RADIUS_CROWN = 0.5  # a detection matches a tree when it lies within half a crown of its centre
 HIDE_MARGIN_CROWN = 0.65  # paste radius around a hidden tree, in crowns (covers the crown's ragged edge)
+Pixel = tuple[float, float]  # (u, v), px
 MIN_RENDER_HEIGHT_M = 0.05  # on the ground the camera sees nothing useful (and the renderer needs z > 0)
 
 
-class DetectionScore(object):
+class DetectionScore:
     """Running comparison of the module's detections with the ground truth of the rendered frames.
 
     Ground truth per frame: the trees of the detected species whose whole crown is in view (what the
@@ -53,7 +59,7 @@ class DetectionScore(object):
     crowns of such a tree (each tree matched once), otherwise a false positive.
     """
 
-    def __init__(self):
+    def __init__(self) -> None:
         self.frames = 0
         self.detections = 0
         self.true_positives = 0
@@ -63,7 +69,7 @@ class DetectionScore(object):
         self.pixel_errors = []
         self.per_frame = []  # (t_ms, n_detections, n_truth, tp, fp)
 
-    def add(self, t_ms, detections_px, truth):
+    def add(self, t_ms: int, detections_px: Sequence[Pixel], truth: Sequence[tuple[float, float, float]]) -> None:
         """detections_px: [(u, v)]; truth: [(u, v, crown_px)] of the trees that should be found."""
         unmatched = list(truth)
         tp = fp = 0
@@ -87,7 +93,7 @@ class DetectionScore(object):
         self.frames_with_false_positives += 1 if fp else 0
         self.per_frame.append((int(t_ms), len(detections_px), len(truth), tp, fp))
 
-    def report(self):
+    def report(self) -> dict:
         truth = self.true_positives + self.missed
         return {
             "frames": self.frames,
@@ -103,7 +109,7 @@ class DetectionScore(object):
         }
 
 
-def parse_detections(lines, width, height):
+def parse_detections(lines: Iterable[str], width: int, height: int) -> list[Pixel]:
     """Pixel centres (u, v) of the T2/N2 lines of one frame (other lines ignored)."""
     out = []
     for line in lines:
@@ -114,23 +120,20 @@ def parse_detections(lines, width, height):
     return out
 
 
-def truth_in_frame(trees, species):
+def truth_in_frame(trees: Iterable[TreeInView], species: str) -> list[tuple[float, float, float]]:
     """(u, v, crown_px) of the complete trees of ``species`` among a frame's TreeInView list."""
     return [(t.u, t.v, t.w) for t in trees if t.complete and t.species == species]
 
 
-class _NullLog(object):
-    def write(self, text):
-        pass
-
-
-class VisionCamera(object):
+class VisionCamera:
     """Rendered frames from the true pose -> the JeVois module -> serial lines (see the module docstring)."""
 
-    def __init__(self, pmap, *, seed=0, frame_period_ms=DEFAULT_FRAME_PERIOD_MS, latency_ms=None,
-                 effects=DEFAULT_EFFECTS, width=352, height=288, mount_offset=(0.0, 0.0), module_params=None,
-                 world=None, serial_stream=None, log_stream=None, pixel_noise_px=0.0, appearance=None,
-                 model=None):
+    def __init__(self, pmap: PlantationMap, *, seed: int = 0, frame_period_ms: int = DEFAULT_FRAME_PERIOD_MS,
+                 latency_ms: int | None = None, effects: str = DEFAULT_EFFECTS, width: int = 352, height: int = 288,
+                 mount_offset: tuple[float, float] = (0.0, 0.0), module_params: dict | None = None,
+                 world: World | None = None, serial_stream: Any = None, log_stream: Any = None,
+                 pixel_noise_px: float = 0.0, appearance: AppearanceSpec | dict | None = None,
+                 model: str | None = None):
         if frame_period_ms <= 0:
             raise ValueError("frame_period_ms must be > 0, got %r" % frame_period_ms)
         if latency_ms is not None and latency_ms < 0:
@@ -139,7 +142,6 @@ class VisionCamera(object):
             raise ValueError("pixel_noise_px must be >= 0, got %r" % pixel_noise_px)
         if effects not in EFFECTS:
             raise ValueError("effects must be one of %s, got %r" % (", ".join(sorted(EFFECTS)), effects))
-        from host_tools.jevois_host import ModuleRunner  # loads the module the JeVois way
 
         self.pmap = pmap
         self.frame_period_ms = int(frame_period_ms)
@@ -157,11 +159,11 @@ class VisionCamera(object):
         params = {"species": pmap.target_species if model is None else str(model)}
         params.update(module_params or {})
         # the module's periodic timing log ("INF ForaNavTrees average ...") would interleave with the CLI output
-        self.runner = ModuleRunner(serial_stream=serial_stream, params=params, log_stream=log_stream or _NullLog())
+        self.runner = ModuleRunner(serial_stream=serial_stream, params=params, log_stream=log_stream or NullLog())
         self.score = DetectionScore()
         self.last_frame = None
 
-    def render(self, true_pose, hidden=frozenset()):
+    def render(self, true_pose: Sequence[float], hidden: Collection[int] = frozenset()) -> Frame:
         """The frame the camera takes at ``true_pose`` (x, y, z, yaw_deg), with ``hidden`` trees removed."""
         pose = Pose(*(float(v) for v in true_pose))
         frame = self.world.render(self.camera, pose, rng=self._rng, effects=self.effects)
@@ -171,7 +173,7 @@ class VisionCamera(object):
             frame.trees = [t for t in frame.trees if t.id not in {h.id for h in hidden}]
         return frame
 
-    def _paste_bare_ground(self, image, pose, hidden):
+    def _paste_bare_ground(self, image: np.ndarray, pose: Pose, hidden: list[Tree]) -> np.ndarray:
         key = frozenset(t.id for t in hidden)
         world = self._hidden_worlds.get(key)
         if world is None:
@@ -191,11 +193,11 @@ class VisionCamera(object):
         out[mask] = under[mask]
         return out
 
-    def process(self, image):
+    def process(self, image: np.ndarray) -> list[str]:
         """Run the module on one frame -> its serial lines (also written to serial_stream, if any)."""
         return self.runner.process_frame(image)
 
-    def capture(self, t_ms, true_pose, hidden=frozenset()):
+    def capture(self, t_ms: int, true_pose: Sequence[float], hidden: Collection[int] = frozenset()) -> list[str]:
         if true_pose[2] <= MIN_RENDER_HEIGHT_M:
             # on the ground: an empty frame, not rendered (the module streams from power-on, and the app
             # takes off only once it has heard the camera)
@@ -207,7 +209,7 @@ class VisionCamera(object):
                        truth_in_frame(frame.trees, self.pmap.target_species))
         return lines
 
-    def _jitter(self, lines):
+    def _jitter(self, lines: list[str]) -> list[str]:
         """Fault: Gaussian noise of pixel_noise_px on each reported centre (detection jitter beyond the
         module's own), re-encoded in the serial grammar; other lines pass unchanged."""
         if self.pixel_noise_px <= 0:
@@ -223,13 +225,13 @@ class VisionCamera(object):
             out.append(line)
         return out
 
-    def frames_csv(self):
+    def frames_csv(self) -> str:
         """One row per frame: capture time, detections sent, trees that should be found, true/false positives."""
         rows = ["t_ms,detections,truth,true_positives,false_positives"]
         rows.extend("%d,%d,%d,%d,%d" % row for row in self.score.per_frame)
         return "\n".join(rows) + "\n"
 
-    def report(self):
+    def report(self) -> dict:
         """Detection totals of the flight so far (for the summary's "vision" entry)."""
         report = self.score.report()
         report.update(fps=round(1000.0 / self.frame_period_ms, 2), latency_ms=self.latency_ms)
@@ -238,15 +240,14 @@ class VisionCamera(object):
         return report
 
 
-def fly_with_vision(pmap, *, seed=0, out_dir=None, options=None, progress=None, **camera_kwargs):
+def fly_with_vision(pmap: PlantationMap, *, seed: int = 0, out_dir: str | os.PathLike | None = None,
+                    options: dict | None = None, progress: Progress | None = None, **camera_kwargs: Any) -> dict:
     """run_flight with a VisionCamera; the summary has "vision" (the camera's detection report)."""
-    from host_tools.flight.harness import run_flight
-
     camera = VisionCamera(pmap, seed=seed, **camera_kwargs)
     return run_flight(pmap, camera, seed=seed, out_dir=out_dir, options=options, progress=progress)
 
 
-def model_option(path):
+def model_option(path: str | os.PathLike) -> str:
     """--model M: the absolute path of a model file the module can load; ForaNavError naming it otherwise."""
     try:
         foranav_model.load_model(str(path))
@@ -255,7 +256,7 @@ def model_option(path):
     return str(Path(path).resolve())
 
 
-def _sim(pmap, seed=0, **kwargs):
+def _sim(pmap: PlantationMap, seed: int = 0, **kwargs: Any) -> "VisionCamera":
     return VisionCamera(pmap, seed=seed, **kwargs)
 
 

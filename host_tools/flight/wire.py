@@ -19,8 +19,8 @@ class WireError(RuntimeError):
     pass
 
 
-class PtyWire(object):
-    def __init__(self, lockstep=True):
+class PtyWire:
+    def __init__(self, lockstep: bool = True):
         self.master_fd, self.slave_fd = os.openpty()
         tty.setraw(self.slave_fd)
         attrs = termios.tcgetattr(self.slave_fd)
@@ -30,12 +30,12 @@ class PtyWire(object):
         self.lockstep = lockstep
         self.bytes_written = 0
 
-    def pending(self):
+    def pending(self) -> int:
         """Bytes written but not yet read on the slave side."""
         buf = fcntl.ioctl(self.slave_fd, termios.FIONREAD, struct.pack("i", 0))
         return struct.unpack("i", buf)[0]
 
-    def write(self, data):
+    def write(self, data: bytes) -> None:
         if not data:
             return
         before = self.pending() if self.lockstep else 0
@@ -51,7 +51,7 @@ class PtyWire(object):
                     raise WireError("pty: %d bytes did not reach the slave side" % len(data))
                 time.sleep(0)
 
-    def close(self):
+    def close(self) -> None:
         for fd in (self.master_fd, self.slave_fd):
             try:
                 os.close(fd)
@@ -59,8 +59,8 @@ class PtyWire(object):
                 pass
         self.master_fd = self.slave_fd = -1
 
-    def __enter__(self):
+    def __enter__(self) -> "PtyWire":
         return self
 
-    def __exit__(self, *exc):
+    def __exit__(self, *exc: object) -> None:
         self.close()

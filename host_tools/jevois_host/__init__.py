@@ -18,6 +18,6 @@ Serial lines go, CRLF-terminated, to ``serial_stream`` (text or binary, e.g. a p
 sent; ``process_frame`` also returns them (without line endings).
 """
 from host_tools.jevois_host import libjevois
-from host_tools.jevois_host.engine import DEFAULT_MODULE_DIR, ModuleRunner, getpar, load_module, setpar
+from host_tools.jevois_host.engine import DEFAULT_MODULE_DIR, ModuleRunner, NullLog, getpar, load_module, setpar
 
-__all__ = ["DEFAULT_MODULE_DIR", "ModuleRunner", "getpar", "libjevois", "load_module", "setpar"]
+__all__ = ["DEFAULT_MODULE_DIR", "ModuleRunner", "NullLog", "getpar", "libjevois", "load_module", "setpar"]

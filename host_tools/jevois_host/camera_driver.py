@@ -15,6 +15,8 @@ Each run loads the module afresh (``engine.load_module``), pushes every frame th
 Only the camera's runtime is used: Python 3.7, numpy 1.16, OpenCV 4.10, the standard library, the libjevois
 stand-in and the module folder. The host test runs the same job in its own process and compares the bytes.
 """
+from __future__ import annotations
+
 import glob
 import hashlib
 import io
@@ -34,7 +36,7 @@ except ImportError:  # run as a script in the camera runtime: this folder holds 
 MODEL_PATTERN = "foranav_*.npz"
 
 
-def read_frame(path):
+def read_frame(path: str) -> np.ndarray:
     """A BGR uint8 frame from a PNG (or any image cv2 reads) or an .npy file."""
     if path.endswith(".npy"):
         frame = np.load(path, allow_pickle=False)
@@ -45,23 +47,21 @@ def read_frame(path):
     return frame
 
 
-class _NullLog:
-    def write(self, text):
-        pass
 
 
-def run_frames(module_dir, frames, params, with_usb=False):
+def run_frames(module_dir: str, frames: list, params: dict, with_usb: bool = False) -> tuple[bytes, np.ndarray | None]:
     """One fresh module over the frames -> (the serial bytes, as sent, the last USB image or None)."""
     serial = io.BytesIO()
-    runner = engine.ModuleRunner(module_dir=module_dir, serial_stream=serial, params=params, log_stream=_NullLog())
+    runner = engine.ModuleRunner(module_dir=module_dir, serial_stream=serial, params=params,
+                                 log_stream=engine.NullLog())
     for frame in frames:
         runner.process_frame(frame, with_usb=with_usb)
     return serial.getvalue(), runner.output_image
 
 
-def model_digests(module_dir):
+def model_digests(module_dir: str) -> dict[str, dict[str, str]]:
     """{model file: {array name: "dtype shape sha256"}} of every shipped model, loaded by the module itself."""
-    instance, _standin = engine.load_module(module_dir, log_stream=_NullLog())
+    instance, _standin = engine.load_module(module_dir, log_stream=engine.NullLog())
     digests = {}
     for name in shipped_models(module_dir):
         arrays = instance.loadModel(name).to_arrays()
@@ -72,11 +72,11 @@ def model_digests(module_dir):
     return digests
 
 
-def shipped_models(module_dir):
+def shipped_models(module_dir: str) -> list[str]:
     return [os.path.basename(p) for p in sorted(glob.glob(os.path.join(module_dir, MODEL_PATTERN)))]
 
 
-def run_job(job):
+def run_job(job: dict) -> None:
     """Do what ``job`` (the dict of job.json) asks; write its outputs."""
     frames = [read_frame(path) for path in job["frames"]]
     for run in job["runs"]:
@@ -92,7 +92,7 @@ def run_job(job):
                       out, indent=1, sort_keys=True)
 
 
-def main(argv):
+def main(argv: list[str]) -> int:
     if len(argv) != 1:
         print("usage: camera_driver.py job.json", file=sys.stderr)
         return 2

@@ -19,17 +19,26 @@ from __future__ import annotations
 import importlib
 import os
 import sys
+from typing import Any
 
 try:
     from host_tools.jevois_host import libjevois as standin
 except ImportError:  # in the camera runtime, where this folder itself is on sys.path
     import libjevois as standin
 
+class NullLog:
+    """A log stream that drops the module's LINFO/LERROR lines (runs that only want the serial output)."""
+
+    def write(self, text: str) -> None:
+        pass
+
+
 DEFAULT_MODULE_DIR = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))),
                                   "jevois_module", "ForaNavTrees")
 
 
-def load_module(module_dir: str | None = None, serial_stream=None, params: dict | None = None, log_stream=None):
+def load_module(module_dir: str | None = None, serial_stream: Any = None, params: dict | None = None,
+                log_stream: Any = None) -> tuple[Any, Any]:
     """Load a JeVois Python module folder -> (instance, the libjevois stand-in module)."""
     module_dir = os.path.abspath(module_dir or DEFAULT_MODULE_DIR)
     name = os.path.basename(module_dir.rstrip(os.sep))
@@ -66,7 +75,7 @@ def _use_folder(module_dir: str) -> None:
                 del sys.modules[plain]  # another folder's copy, from an earlier load
 
 
-def setpar(instance, name: str, value) -> None:
+def setpar(instance: object, name: str, value: Any) -> None:
     """The engine's ``setpar <name> <value>`` for a module parameter (KeyError if there is none)."""
     parameters = standin.parameters(instance)
     if name not in parameters:
@@ -74,7 +83,7 @@ def setpar(instance, name: str, value) -> None:
     parameters[name].set(value)
 
 
-def getpar(instance, name: str):
+def getpar(instance: object, name: str) -> Any:
     """The engine's ``getpar <name>``."""
     return standin.parameters(instance)[name].get()
 
@@ -82,7 +91,7 @@ def getpar(instance, name: str):
 class FrameLines:
     """Serial sink: records the lines of the current frame and forwards them to the caller's stream."""
 
-    def __init__(self, stream):
+    def __init__(self, stream: Any):
         self.stream = stream
         self.buffer = ""
         self.lines = []
@@ -104,8 +113,8 @@ class FrameLines:
 class ModuleRunner:
     """Push frames through the camera module as the JeVois engine does, one frame at a time."""
 
-    def __init__(self, module_dir: str | None = None, serial_stream=None, params: dict | None = None,
-                 output_size: tuple | None = None, log_stream=None):
+    def __init__(self, module_dir: str | None = None, serial_stream: Any = None, params: dict | None = None,
+                 output_size: tuple | None = None, log_stream: Any = None):
         self._sink = FrameLines(serial_stream)
         self._log_stream = log_stream
         self.instance, self.jevois = load_module(module_dir, self._sink, params, log_stream)
@@ -120,7 +129,7 @@ class ModuleRunner:
         self.jevois.configure(serial_stream=self._sink, log_stream=self._log_stream)
         self.jevois.set_frame_number(self.frame_number)
 
-    def process_frame(self, bgr, with_usb: bool = False) -> list:
+    def process_frame(self, bgr: Any, with_usb: bool = False) -> list:
         """Run process() (with_usb) or processNoUSB() on one BGR frame -> the serial lines it sent."""
         self._sink.lines = []
         self._bind()
@@ -135,10 +144,10 @@ class ModuleRunner:
         self.frame_number += 1
         return list(self._sink.lines)
 
-    def setpar(self, name: str, value) -> None:
+    def setpar(self, name: str, value: Any) -> None:
         setpar(self.instance, name, value)
 
-    def getpar(self, name: str):
+    def getpar(self, name: str) -> Any:
         return getpar(self.instance, name)
 
     def command(self, line: str) -> str:

@@ -19,8 +19,11 @@ next one in the same process (a worker flies thousands of flights in a row); the
 This file is also run by the camera's own runtime (Python 3.7, numpy 1.16, OpenCV 4.10, see
 ``camera_driver.py``): keep it to that subset.
 """
+from __future__ import annotations
+
 import sys
 import time
+from typing import Any, Callable, NoReturn
 
 import cv2
 import numpy as np
@@ -36,7 +39,7 @@ _line_ending = "\r\n"
 _frame_number = 0
 
 
-def configure(serial_stream=None, log_stream=None, line_ending="\r\n"):
+def configure(serial_stream: Any = None, log_stream: Any = None, line_ending: str = "\r\n") -> None:
     """Host only: where sendSerial() and the log go (text or binary streams; None drops serial output)."""
     global _serial_stream, _log_stream, _line_ending
     _serial_stream = serial_stream
@@ -44,19 +47,19 @@ def configure(serial_stream=None, log_stream=None, line_ending="\r\n"):
     _line_ending = line_ending
 
 
-def reset():
+def reset() -> None:
     """Host only: every piece of module-level state back to its start value (no serial sink, frame 0)."""
     configure()
     set_frame_number(0)
 
 
-def set_frame_number(number):
+def set_frame_number(number: int) -> None:
     """Host only: the value frameNum() returns (the runner counts its own frames)."""
     global _frame_number
     _frame_number = int(number)
 
 
-def _write(stream, text):
+def _write(stream: Any, text: str) -> None:
     if stream is None:
         return
     try:
@@ -67,37 +70,37 @@ def _write(stream, text):
         stream.flush()
 
 
-def sendSerial(string):
+def sendSerial(string: str) -> None:
     _write(_serial_stream, str(string) + _line_ending)
 
 
-def frameNum():
+def frameNum() -> int:
     return _frame_number
 
 
-def _log(prefix, message):
+def _log(prefix: str, message: str) -> None:
     _write(_log_stream, "%s %s\n" % (prefix, message))
 
 
-def LDEBUG(message):
+def LDEBUG(message: str) -> None:
     pass  # compiled out on the camera
 
 
-def LINFO(message):
+def LINFO(message: str) -> None:
     _log("INF", message)
 
 
-def LERROR(message):
+def LERROR(message: str) -> None:
     _log("ERR", message)
 
 
-def LFATAL(message):
+def LFATAL(message: str) -> NoReturn:
     _log("FTL", message)
     raise RuntimeError(message)
 
 
-class Timer(object):
-    def __init__(self, prefix, interval, loglevel):
+class Timer:
+    def __init__(self, prefix: str, interval: int, loglevel: int):
         self.prefix = str(prefix)
         self.interval = max(1, int(interval))
         self.loglevel = int(loglevel)
@@ -108,13 +111,13 @@ class Timer(object):
         self._window_wall = None
         self._window_cpu = None
 
-    def start(self):
+    def start(self) -> None:
         now = time.perf_counter()
         if self._window_wall is None:
             self._window_wall, self._window_cpu = now, time.process_time()
         self._started = now
 
-    def stop(self):
+    def stop(self) -> str:
         if self._started is None:
             return self.text
         now = time.perf_counter()
@@ -133,8 +136,8 @@ class Timer(object):
         return self.text
 
 
-class ParameterCategory(object):
-    def __init__(self, name, description):
+class ParameterCategory:
+    def __init__(self, name: str, description: str):
         self.name, self.description = str(name), str(description)
 
 
@@ -143,10 +146,11 @@ _TYPES = {"bool": bool, "char": str, "byte": int, "uint8": int, "int16": int, "u
           "double": float, "str": str}
 
 
-class Parameter(object):
+class Parameter:
     """A module parameter; the engine's setpar/getpar are host_tools.jevois_host.ModuleRunner.setpar/getpar."""
 
-    def __init__(self, component, name, type_str, description, default, category):
+    def __init__(self, component: object, name: str, type_str: str, description: str, default: Any,
+                 category: ParameterCategory):
         if type_str not in _TYPES:
             raise ValueError("Unsupported parameter type %r; valid: %s" % (type_str, ", ".join(sorted(_TYPES))))
         self.component, self.name, self.type_str = component, str(name), type_str
@@ -158,7 +162,7 @@ class Parameter(object):
             raise ValueError("Parameter %s already exists" % self.name)
         registry[self.name] = self
 
-    def _convert(self, value):
+    def _convert(self, value: Any) -> Any:
         kind = _TYPES[self.type_str]
         if kind is bool and isinstance(value, str):
             if value.lower() not in ("true", "false", "1", "0"):
@@ -166,55 +170,55 @@ class Parameter(object):
             return value.lower() in ("true", "1")
         return kind(value)
 
-    def get(self):
+    def get(self) -> Any:
         return self._value
 
-    def set(self, value):
+    def set(self, value: Any) -> None:
         value = self._convert(value)
         if self._callback is not None:
             self._callback(value)  # raises to refuse the value
         self._value = value
 
-    def setCallback(self, callback):
+    def setCallback(self, callback: Callable[[Any], None]) -> None:
         callback(self._value)
         self._callback = callback
 
 
-def parameters(component):
+def parameters(component: object) -> dict[str, Parameter]:
     """Host only: {name: Parameter} created by a module instance."""
     return component.__dict__.get("_jevois_host_parameters", {})
 
 
-class InputFrame(object):
+class InputFrame:
     """One camera frame (BGR on the host)."""
 
-    def __init__(self, bgr):
+    def __init__(self, bgr: np.ndarray):
         self._bgr = np.ascontiguousarray(bgr)
 
-    def getCvBGR(self, casync=False):
+    def getCvBGR(self, casync: bool = False) -> np.ndarray:
         return self._bgr.copy()
 
-    def getCvGRAY(self, casync=False):
+    def getCvGRAY(self, casync: bool = False) -> np.ndarray:
         return cv2.cvtColor(self._bgr, cv2.COLOR_BGR2GRAY)
 
-    def getCvRGB(self, casync=False):
+    def getCvRGB(self, casync: bool = False) -> np.ndarray:
         return cv2.cvtColor(self._bgr, cv2.COLOR_BGR2RGB)
 
-    def getCvRGBA(self, casync=False):
+    def getCvRGBA(self, casync: bool = False) -> np.ndarray:
         return cv2.cvtColor(self._bgr, cv2.COLOR_BGR2RGBA)
 
-    def done(self):
+    def done(self) -> None:
         pass
 
 
-class OutputFrame(object):
+class OutputFrame:
     """The USB video output of one frame; keeps what the module sent in ``image`` (BGR)."""
 
-    def __init__(self, width, height):
+    def __init__(self, width: int, height: int):
         self.width, self.height = int(width), int(height)
         self.image = None
 
-    def sendCv(self, img, quality=75):
+    def sendCv(self, img: np.ndarray, quality: int = 75) -> None:
         if img.ndim == 2:
             img = cv2.cvtColor(img, cv2.COLOR_GRAY2BGR)
         elif img.shape[2] == 4:
@@ -223,11 +227,11 @@ class OutputFrame(object):
             img = cv2.resize(img, (self.width, self.height), interpolation=cv2.INTER_AREA)
         self.image = img.copy()
 
-    def sendCvBGR(self, img, quality=75):
+    def sendCvBGR(self, img: np.ndarray, quality: int = 75) -> None:
         if (img.shape[1], img.shape[0]) != (self.width, self.height):
             raise ValueError("sendCvBGR: image is %dx%d, output is %dx%d"
                              % (img.shape[1], img.shape[0], self.width, self.height))
         self.image = img.copy()
 
-    def sendScaledCvBGR(self, img, quality=75):
+    def sendScaledCvBGR(self, img: np.ndarray, quality: int = 75) -> None:
         self.sendCv(img, quality)

@@ -5,22 +5,25 @@ the path at varied yaw, without and with per-frame sensor effects, and in every 
 CSV ... (and --ground), the same again over a Map 1 drawn with photo crowns, reported next to the procedural
 figures (loading the library, the photo mosaic build and its frames/s).
 """
+import argparse
 import json
 import time
+from collections.abc import Callable, Sequence
 
 import cv2
 import numpy as np
 
-from host_tools.maps import load_map
+from host_tools.maps import PlantationMap, load_map
 from host_tools.sim.camera import SENSOR_MODES, CameraModel, Pose
 from host_tools.sim.cli_args import appearance_from_args
-from host_tools.sim.world import SENSOR_EFFECTS, World
+from host_tools.sim.world import SENSOR_EFFECTS, Effects, World
 
 TARGET_FPS = 500
 MIN_SECONDS = 1.0
 
 
-def measure(world, camera, poses, effects=None, min_seconds=MIN_SECONDS, clock=time.perf_counter):
+def measure(world: World, camera: CameraModel, poses: Sequence[Pose], effects: Effects | None = None,
+            min_seconds: float = MIN_SECONDS, clock: Callable[[], float] = time.perf_counter) -> float:
     """Frames per second rendering the poses round-robin for at least min_seconds."""
     rng = np.random.default_rng(0)
     count, start = 0, clock()
@@ -36,7 +39,7 @@ def measure(world, camera, poses, effects=None, min_seconds=MIN_SECONDS, clock=t
             return count / elapsed
 
 
-def flight_poses(pmap, count=200, seed=0):
+def flight_poses(pmap: PlantationMap, count: int = 200, seed: int = 0) -> list[Pose]:
     rng = np.random.default_rng(seed)
     xs = rng.uniform(0.3, 3.9, count)
     ys = rng.uniform(-0.6, 0.6, count)
@@ -44,7 +47,7 @@ def flight_poses(pmap, count=200, seed=0):
     return [Pose(float(x), float(y), pmap.altitude_m, float(a)) for x, y, a in zip(xs, ys, yaws)]
 
 
-def run(args):
+def run(args: argparse.Namespace) -> int:
     cv2.setNumThreads(1)
     pmap = load_map("map1")
     start = time.perf_counter()

@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from host_tools.sim.sprite import canvas_for, radial_shading
+from host_tools.sim.sprite import Sprite, canvas_for, radial_shading
 
 CITRUS_LEAVES = ((30, 95, 45), (40, 120, 60), (25, 80, 38), (55, 140, 80))
 CITRUS_FRUIT = (20, 120, 235)
@@ -15,7 +15,8 @@ OLIVE_LEAVES = ((100, 135, 115), (118, 152, 132), (85, 110, 95), (138, 165, 150)
 OLIVE_GAP = (70, 92, 92)
 
 
-def render_citrus(rng, centre_col, centre_row, diameter_px, light=1.0, sun_dir=(0.7, -0.7)):
+def render_citrus(rng: np.random.Generator, centre_col: float, centre_row: float, diameter_px: float,
+                  light: float = 1.0, sun_dir: tuple[float, float] = (0.7, -0.7)) -> Sprite:
     canvas, centre, origin = canvas_for(centre_col, centre_row, diameter_px)
     radius = diameter_px / 2.0
     tint = light * rng.uniform(0.9, 1.1, size=3) ** 0.3
@@ -30,7 +31,8 @@ def render_citrus(rng, centre_col, centre_row, diameter_px, light=1.0, sun_dir=(
     return canvas.to_sprite(origin, blur_sigma=0.003 * diameter_px, shading=shading)
 
 
-def render_olive(rng, centre_col, centre_row, diameter_px, light=1.0, sun_dir=(0.7, -0.7)):
+def render_olive(rng: np.random.Generator, centre_col: float, centre_row: float, diameter_px: float,
+                 light: float = 1.0, sun_dir: tuple[float, float] = (0.7, -0.7)) -> Sprite:
     canvas, centre, origin = canvas_for(centre_col, centre_row, diameter_px)
     radius = diameter_px / 2.0
     tint = light * rng.uniform(0.9, 1.1, size=3) ** 0.3

@@ -10,6 +10,8 @@ from typing import NamedTuple
 
 import numpy as np
 
+Coordinate = float | np.ndarray  # a scalar, or an array of them (vectorised)
+
 METRES_PER_PIXEL_PER_METRE_AT_352 = 0.0031  # the paper's flight code
 REFERENCE_WIDTH = 352
 FOCAL_PX_AT_352 = 1.0 / METRES_PER_PIXEL_PER_METRE_AT_352  # 322.58 px
@@ -24,7 +26,7 @@ class Pose(NamedTuple):
     yaw_deg: float = 0.0
 
 
-def sensor_mode(text):
+def sensor_mode(text: str) -> tuple[int, int]:
     """'352x288' -> (352, 288); one of SENSOR_MODES."""
     try:
         width, height = (int(v) for v in str(text).lower().split("x"))
@@ -43,7 +45,7 @@ class CameraModel:
     (forward, left) metres; the camera's ground point is MAV + R(yaw) * mount_offset.
     """
 
-    def __init__(self, width=352, height=288, mount_offset=(0.0, 0.0)):
+    def __init__(self, width: int = 352, height: int = 288, mount_offset: tuple[float, float] = (0.0, 0.0)):
         if (width, height) not in SENSOR_MODES:
             raise ValueError("unknown sensor mode %dx%d" % (width, height))
         self.width = int(width)
@@ -51,28 +53,28 @@ class CameraModel:
         self.mount_offset = (float(mount_offset[0]), float(mount_offset[1]))
         self.focal_px = FOCAL_PX_AT_352 * self.width / REFERENCE_WIDTH
 
-    def __repr__(self):
+    def __repr__(self) -> str:
         return "CameraModel(width=%d, height=%d, mount_offset=%r)" % (self.width, self.height, self.mount_offset)
 
-    def to_dict(self):
+    def to_dict(self) -> dict:
         return {"width": self.width, "height": self.height, "focal_px": self.focal_px,
                 "mount_offset": list(self.mount_offset)}
 
     @classmethod
-    def from_dict(cls, data):
+    def from_dict(cls, data: dict) -> "CameraModel":
         return cls(int(data["width"]), int(data["height"]), tuple(data.get("mount_offset", (0.0, 0.0))))
 
-    def metres_per_pixel(self, z):
+    def metres_per_pixel(self, z: float) -> float:
         """Ground size of one pixel (metres) seen from height z (metres)."""
         return z / self.focal_px
 
-    def ground_point(self, pose):
+    def ground_point(self, pose: Pose) -> tuple[float, float]:
         """World (x, y) of the camera's nadir: MAV position + R(yaw) * mount offset."""
         c, s = _cos_sin(pose.yaw_deg)
         fwd, left = self.mount_offset
         return pose.x + c * fwd - s * left, pose.y + s * fwd + c * left
 
-    def pixel_to_world(self, pose, u, v):
+    def pixel_to_world(self, pose: Pose, u: Coordinate, v: Coordinate) -> tuple[Coordinate, Coordinate]:
         """Ground point (x, y) seen at pixel (u, v); works on scalars and numpy arrays."""
         scale = pose.z / self.focal_px
         forward = (self.height / 2.0 - np.asarray(v, dtype=float)) * scale
@@ -81,7 +83,7 @@ class CameraModel:
         gx, gy = self.ground_point(pose)
         return _scalar(gx + c * forward - s * left), _scalar(gy + s * forward + c * left)
 
-    def world_to_pixel(self, pose, x, y):
+    def world_to_pixel(self, pose: Pose, x: Coordinate, y: Coordinate) -> tuple[Coordinate, Coordinate]:
         """Pixel (u, v) of the ground point (x, y); works on scalars and numpy arrays."""
         gx, gy = self.ground_point(pose)
         dx = np.asarray(x, dtype=float) - gx
@@ -92,7 +94,7 @@ class CameraModel:
         scale = self.focal_px / pose.z
         return _scalar(self.width / 2.0 - left * scale), _scalar(self.height / 2.0 - forward * scale)
 
-    def pixel_to_world_affine(self, pose):
+    def pixel_to_world_affine(self, pose: Pose) -> np.ndarray:
         """2x3 matrix A with [x, y] = A @ [u, v, 1] (continuous pixel coordinates)."""
         scale = pose.z / self.focal_px
         c, s = _cos_sin(pose.yaw_deg)
@@ -106,10 +108,10 @@ class CameraModel:
         ])
 
 
-def _cos_sin(yaw_deg):
+def _cos_sin(yaw_deg: float) -> tuple[float, float]:
     rad = math.radians(yaw_deg)
     return math.cos(rad), math.sin(rad)
 
 
-def _scalar(value):
+def _scalar(value: Coordinate) -> Coordinate:
     return float(value) if np.ndim(value) == 0 else value

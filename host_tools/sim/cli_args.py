@@ -1,19 +1,21 @@
 """Argument helpers shared by the simulator's commands."""
+import argparse
 import math
+from collections.abc import Iterable
 from pathlib import Path
 
 from host_tools import argtypes
 from host_tools.errors import ForaNavError
 from host_tools.sim.camera import CameraModel, SENSOR_MODES
-from host_tools.sim.crowns import AppearanceSpec, load_appearance
-from host_tools.sim.world import NO_EFFECTS, SENSOR_EFFECTS
+from host_tools.sim.crowns import Appearance, AppearanceSpec, load_appearance
+from host_tools.sim.world import NO_EFFECTS, SENSOR_EFFECTS, World
 
 EFFECT_PRESETS = {"none": NO_EFFECTS, "sensor": SENSOR_EFFECTS}
 MOUNT_OFFSET_M = argtypes.float_range(-1.0, 1.0)  # a camera on a MAV sits within a metre of its centre
 ALTITUDE_M = argtypes.float_range(0.05, 100.0)  # above the ground, below where a tree is a pixel
 
 
-def add_camera_arguments(parser):
+def add_camera_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--width", type=int, default=352, help="sensor mode width (default 352)")
     parser.add_argument("--height", type=int, default=288, help="sensor mode height (default 288)")
     parser.add_argument("--mount-offset", type=MOUNT_OFFSET_M, nargs=2, default=(0.0, 0.0), metavar=("FWD", "LEFT"),
@@ -23,14 +25,14 @@ def add_camera_arguments(parser):
                         help="per-frame camera effects: none (default) or sensor (blur, noise, JPEG)")
 
 
-def camera_from_args(args):
+def camera_from_args(args: argparse.Namespace) -> CameraModel:
     if (args.width, args.height) not in SENSOR_MODES:
         raise ForaNavError("--width/--height: unknown sensor mode %dx%d (expected one of %s)"
                            % (args.width, args.height, ", ".join("%dx%d" % m for m in SENSOR_MODES)))
     return CameraModel(args.width, args.height, tuple(args.mount_offset))
 
 
-def add_appearance_arguments(parser):
+def add_appearance_arguments(parser: argparse.ArgumentParser) -> None:
     """--crowns / --ground / --ground-gsd / --crown-shadows: how the world looks (one parser, every command)."""
     group = parser.add_argument_group("appearance (photo crowns and ground; see docs/simulator.md)")
     group.add_argument("--crowns", nargs="+", action="extend", default=None, metavar="CSV",
@@ -44,7 +46,7 @@ def add_appearance_arguments(parser):
                        help="photo crowns also cast the drawn shadow (default: the photo's own shading only)")
 
 
-def appearance_spec_from_args(args):
+def appearance_spec_from_args(args: argparse.Namespace) -> AppearanceSpec:
     """The AppearanceSpec of the parsed options (paths resolved), checked for consistency (not loaded)."""
     crowns = tuple(str(Path(p).resolve()) for p in (getattr(args, "crowns", None) or ()))
     ground = getattr(args, "ground", None)
@@ -60,7 +62,8 @@ def appearance_spec_from_args(args):
     return AppearanceSpec(crowns, ground, gsd, bool(getattr(args, "crown_shadows", False)))
 
 
-def appearance_from_args(args, species, what):
+def appearance_from_args(args: argparse.Namespace, species: Iterable[str],
+                         what: str) -> tuple[AppearanceSpec, Appearance | None]:
     """(AppearanceSpec, loaded Appearance or None), checked against the ``species`` that ``what`` draws.
 
     Raises ForaNavError (one line naming the file and row) before the command writes anything."""
@@ -71,7 +74,7 @@ def appearance_from_args(args, species, what):
     return spec, appearance
 
 
-def photo_summary(world):
+def photo_summary(world: World) -> str | None:
     """One line: which species of the world came from photos (or None without photo crowns)."""
     if not world.photo_crowns:
         return None

@@ -27,15 +27,19 @@ Real footage with a pose log uses the same sidecar: ``trees`` null (or the trees
 null or the surveyed map. Frame ``index`` i is the i-th decoded video frame; ``t_s`` is seconds from the start.
 """
 import math
+import os
+from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import NoReturn
 
 import cv2
+import numpy as np
 
 from host_tools import fileio
 from host_tools.errors import ForaNavError
 from host_tools.sim.camera import CameraModel, Pose
-from host_tools.sim.world import ObjectInView, TreeInView
+from host_tools.sim.world import Frame, ObjectInView, TreeInView
 
 FORMAT = "foranav-clip"
 VERSION = 1
@@ -64,10 +68,10 @@ class Clip:
     source: dict
 
     @property
-    def video_path(self):
+    def video_path(self) -> Path:
         return self.directory / self.video
 
-    def images(self):
+    def images(self) -> Iterator[np.ndarray]:
         """Yield the decoded BGR frames in order (OpenCV)."""
         capture = cv2.VideoCapture(str(self.video_path))
         if not capture.isOpened():
@@ -81,7 +85,7 @@ class Clip:
         finally:
             capture.release()
 
-    def check_video(self):
+    def check_video(self) -> None:
         """ForaNavError unless the video opens and holds at least one frame per sidecar record, of the camera's
         size (a truncated or swapped video would otherwise replay part of the clip without a word)."""
         capture = cv2.VideoCapture(str(self.video_path))
@@ -102,14 +106,15 @@ class Clip:
             raise ForaNavError("%s: %d frames, the sidecar has %d (truncated video?)"
                                % (self.video_path, count, len(self.frames)))
 
-    def __len__(self):
+    def __len__(self) -> int:
         return len(self.frames)
 
 
 # ---- pure: sidecar records ---------------------------------------------------------------------------------
 
 
-def frame_record(index, t_s, pose, trees, objects=()):
+def frame_record(index: int, t_s: float, pose: Pose, trees: Sequence[TreeInView] | None,
+                 objects: Sequence[ObjectInView] = ()) -> dict:
     """The sidecar object of one frame (trees None = no ground truth)."""
     record = {"index": int(index), "t_s": round(float(t_s), 6),
               "pose": {"x": _r(pose.x), "y": _r(pose.y), "z": _r(pose.z), "yaw_deg": _r(pose.yaw_deg)},
@@ -120,24 +125,27 @@ def frame_record(index, t_s, pose, trees, objects=()):
     return record
 
 
-def sidecar(frames_records, camera, fps, map_dict=None, source=None, video=VIDEO_NAME):
+def sidecar(frames_records: list[dict], camera: CameraModel, fps: float, map_dict: dict | None = None,
+            source: dict | None = None, video: str = VIDEO_NAME) -> dict:
     return {"format": FORMAT, "version": VERSION, "video": video, "fps": float(fps),
             "camera": camera.to_dict(), "map": map_dict, "source": dict(source or {}), "frames": frames_records}
 
 
-def _tree_record(t):
+def _tree_record(t: TreeInView) -> dict:
     return {"id": t.id, "species": t.species, "target": bool(t.target), "u": _r(t.u), "v": _r(t.v),
             "w": _r(t.w), "h": _r(t.h), "complete": bool(t.complete), "x": _r(t.x), "y": _r(t.y)}
 
 
-def _r(value):
+def _r(value: float) -> float:
     return round(float(value), 4)
 
 
 # ---- adapters: files ---------------------------------------------------------------------------------------
 
 
-def write_clip(out_dir, frames, times_s, camera, fps, map_dict=None, source=None, quality=DEFAULT_QUALITY):
+def write_clip(out_dir: str | os.PathLike, frames: Iterable[Frame], times_s: Sequence[float], camera: CameraModel,
+               fps: float, map_dict: dict | None = None, source: dict | None = None,
+               quality: int = DEFAULT_QUALITY) -> int:
     """Write frames (world.Frame, any iterable) with their times as a clip folder; returns the frame count.
 
     The video is written to a temporary file and renamed, then the sidecar: a failed run leaves no clip.
@@ -166,7 +174,7 @@ def write_clip(out_dir, frames, times_s, camera, fps, map_dict=None, source=None
     return len(records)
 
 
-def read_clip(directory):
+def read_clip(directory: str | os.PathLike) -> Clip:
     """Read a clip folder's sidecar (validated); images are decoded lazily by Clip.images()."""
     directory = Path(directory)
     path = directory / SIDECAR_NAME if directory.is_dir() else directory
@@ -175,8 +183,8 @@ def read_clip(directory):
     return clip_from_dict(data, directory, str(path))
 
 
-def clip_from_dict(data, directory, source_name="<clip>"):
-    def fail(where, message):
+def clip_from_dict(data: dict, directory: str | os.PathLike, source_name: str = "<clip>") -> Clip:
+    def fail(where: str, message: str) -> NoReturn:
         raise ForaNavError("%s: %s: %s" % (source_name, where, message))
 
     if not isinstance(data, dict) or data.get("format") != FORMAT:

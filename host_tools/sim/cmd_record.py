@@ -4,6 +4,8 @@ Example: foranav record --map map1 --out clips/map1 --speed 0.3 --fps 10
 The MAV holds yaw (default 0, as the paper's navigation app does) and altitude (default: the map's).
 The sidecar format is documented in host_tools/sim/clip.py and README.md (Clips).
 """
+import argparse
+
 import numpy as np
 
 from host_tools import argtypes, fileio
@@ -19,7 +21,7 @@ MAX_FPS = 120.0  # the fastest JeVois-A33 sensor mode
 MAX_FRAMES = 50000  # 1.5 hours at 9 fps: a longer clip is a typo (--speed 0.0001), not a recording
 
 
-def add_arguments(parser):
+def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--map", required=True, help="map file or built-in map name (map1, map2, map3)")
     parser.add_argument("--out", required=True, help="output folder (clip.avi + clip.json)")
     parser.add_argument("--speed", type=argtypes.float_range(0.01, 10.0), default=0.3,
@@ -38,7 +40,7 @@ def add_arguments(parser):
     add_appearance_arguments(parser)
 
 
-def run(args):
+def run(args: argparse.Namespace) -> int:
     fileio.check_output_dir(args.out)
     pmap = load_map(args.map)
     camera = camera_from_args(args)

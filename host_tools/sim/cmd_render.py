@@ -4,7 +4,10 @@ Example: foranav render --map map1 --x 1.86 --y 0.57 --out frame.png
 The altitude defaults to the map's flight height; --seed overrides the map's seed (ground and tree variation).
 Prints the trees in view (id, species, target, pixel centre and box size, complete or cut by the frame edge).
 """
+import argparse
+
 import cv2
+import numpy as np
 
 from host_tools import argtypes, fileio
 from host_tools.errors import ForaNavError
@@ -15,7 +18,7 @@ from host_tools.sim.cli_args import (ALTITUDE_M, EFFECT_PRESETS, add_appearance_
 from host_tools.sim.world import World
 
 
-def add_arguments(parser):
+def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--map", required=True, help="map file or built-in map name (map1, map2, map3)")
     parser.add_argument("--x", type=argtypes.finite, required=True, help="MAV x, metres (forward along the rows)")
     parser.add_argument("--y", type=argtypes.finite, required=True, help="MAV y, metres (left)")
@@ -27,7 +30,7 @@ def add_arguments(parser):
     parser.add_argument("--out", required=True, help="output PNG")
 
 
-def run(args):
+def run(args: argparse.Namespace) -> int:
     fileio.check_output_file(args.out)
     pmap = load_map(args.map)
     camera = camera_from_args(args)
@@ -45,7 +48,7 @@ def run(args):
     return 0
 
 
-def write_png(path, image):
+def write_png(path: str, image: np.ndarray) -> None:
     """Write a PNG atomically; fixed compression so the same image gives the same bytes."""
     ok, data = cv2.imencode(".png", image, [cv2.IMWRITE_PNG_COMPRESSION, 6])
     if not ok:

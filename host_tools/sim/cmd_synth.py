@@ -15,6 +15,7 @@ repeated (--species oil_palm --species olive = --species oil_palm olive), make a
 --crowns CSV ... draws the trees of the species in those annotation CSVs from their photographs (the crown
 library, docs/simulator.md), scaled to the flight camera: crops and frames of real crowns at flight scale.
 """
+import argparse
 import csv
 import io
 import shutil
@@ -35,7 +36,7 @@ MAX_COUNT = 100000  # crops or frames: beyond this a data set no longer fits a l
 DEFAULT_SPECIES = ("oil_palm",)
 
 
-def add_arguments(parser):
+def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", required=True, help="output folder (created; existing crops/ and frames/ replaced)")
     parser.add_argument("--count", type=argtypes.int_range(1, MAX_COUNT), required=True,
                         help="positive crops (and as many negatives)")
@@ -47,7 +48,7 @@ def add_arguments(parser):
     add_appearance_arguments(parser)
 
 
-def run(args):
+def run(args: argparse.Namespace) -> int:
     fileio.check_output_dir(args.out)
     frame_count = args.count if args.frames is None else args.frames
     species = tuple(dict.fromkeys(args.species or DEFAULT_SPECIES))
@@ -66,7 +67,7 @@ def run(args):
     return 0
 
 
-def write_into(out, positives, negatives, frames):
+def write_into(out: Path, positives: list, negatives: list, frames: list) -> None:
     """Build the dataset in a scratch folder inside ``out``, then swap it in: never half-written."""
     out.mkdir(parents=True, exist_ok=True)
     scratch = Path(tempfile.mkdtemp(prefix=".synth.", dir=out))
@@ -80,7 +81,7 @@ def write_into(out, positives, negatives, frames):
         shutil.rmtree(scratch, ignore_errors=True)
 
 
-def write_dataset(root, positives, negatives, frames):
+def write_dataset(root: str | Path, positives: list, negatives: list, frames: list) -> None:
     rows = []
     for folder, crops in (("pos", positives), ("neg", negatives)):
         for i, crop in enumerate(crops):

@@ -25,7 +25,7 @@ Ground (``--ground IMAGE --ground-gsd M_PER_PX``): the photo scaled to the mosai
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Optional, Sequence
+from typing import Iterable, Optional, Sequence
 
 import cv2
 import numpy as np
@@ -59,13 +59,13 @@ class CrownLibrary:
     skipped: dict = field(default_factory=dict)  # reason -> count
 
     @property
-    def species(self):
+    def species(self) -> tuple[str, ...]:
         return tuple(s for s in SPECIES if self.crowns.get(s))
 
-    def count(self, species):
+    def count(self, species: str) -> int:
         return len(self.crowns.get(species, ()))
 
-    def check_covers(self, species, what):
+    def check_covers(self, species: Sequence[str], what: str) -> None:
         """Raise unless the library has a crown for at least one of ``species`` (the species of ``what``)."""
         if not any(self.crowns.get(s) for s in species):
             skipped = ", ".join("%d %s" % (n, reason) for reason, n in sorted(self.skipped.items())) or "none"
@@ -177,7 +177,7 @@ def crown_sprite(crown: Crown, col: float, row: float, diameter_px: float, angle
     return Sprite(premultiplied.astype(np.float32), alpha.astype(np.float32), origin)
 
 
-def load_ground(path) -> np.ndarray:
+def load_ground(path: str | Path) -> np.ndarray:
     """The ground photo (BGR uint8); ForaNavError naming the file when it does not load."""
     image = cv2.imread(str(path), cv2.IMREAD_COLOR)
     if image is None or image.size == 0:
@@ -207,15 +207,15 @@ class AppearanceSpec:
     crown_shadows: bool = False
 
     @property
-    def default(self):
+    def default(self) -> bool:
         return not self.crowns and self.ground is None
 
-    def to_dict(self):
+    def to_dict(self) -> dict:
         return {"crowns": list(self.crowns), "ground": self.ground, "ground_gsd_m": self.ground_gsd_m,
                 "crown_shadows": self.crown_shadows}
 
     @classmethod
-    def from_dict(cls, data):
+    def from_dict(cls, data: dict | None) -> "AppearanceSpec":
         data = dict(data or {})
         return cls(tuple(data.get("crowns") or ()), data.get("ground"), data.get("ground_gsd_m"),
                    bool(data.get("crown_shadows", False)))
@@ -229,12 +229,12 @@ class Appearance:
     ground_photo: Optional[np.ndarray] = None
 
     @classmethod
-    def load(cls, spec):
+    def load(cls, spec: AppearanceSpec) -> "Appearance":
         library = load_library(spec.crowns) if spec.crowns else None
         photo = load_ground(spec.ground) if spec.ground is not None else None
         return cls(spec, library, photo)
 
-    def check_species(self, species, what):
+    def check_species(self, species: Iterable[str], what: str) -> None:
         if self.library is not None:
             self.library.check_covers(tuple(species), what)
 

@@ -10,13 +10,15 @@ target trees (the window cuts the crown) and background.
 Everything here is pure: seeds in, images and records out; cmd_synth writes the files.
 """
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from host_tools.maps import SPECIES, PlantationMap, Tree, WorldObject
 from host_tools.sim.camera import CameraModel, Pose
-from host_tools.sim.world import World, random_effects
+from host_tools.sim.crowns import Appearance
+from host_tools.sim.world import Frame, ObjectInView, TreeInView, World, random_effects
 
 FRAMES_PER_SCENE = 8
 WINDOW_FACTOR = (1.15, 1.45)
@@ -41,7 +43,7 @@ class AnnotatedFrame:
     boxes: tuple  # ((x_center, y_center, width, height, label), ...) complete trees and objects only
 
 
-def random_scene(rng, target_species, name="synth"):
+def random_scene(rng: np.random.Generator, target_species: str, name: str = "synth") -> PlantationMap:
     """A small random plot: rows of trees (targets and look-alikes), sometimes clusters, roofs and crossings."""
     altitude = float(rng.uniform(1.0, 1.5))
     lookalikes = [s for s in SPECIES if s not in target_species]
@@ -74,7 +76,8 @@ def random_scene(rng, target_species, name="synth"):
                          target_species[0])
 
 
-def scene_frames(rng, scene, camera, count, appearance=None):
+def scene_frames(rng: np.random.Generator, scene: PlantationMap, camera: CameraModel, count: int,
+                 appearance: Appearance | None = None) -> list[Frame]:
     """Render count frames of a scene at random poses: [(image, trees_in_view, objects_in_view)]."""
     world = World.from_map(scene, margin_m=0.5, appearance=appearance)
     out = []
@@ -87,14 +90,15 @@ def scene_frames(rng, scene, camera, count, appearance=None):
     return out
 
 
-def frame_boxes(trees, objects):
+def frame_boxes(trees: Sequence[TreeInView], objects: Sequence[ObjectInView]) -> tuple:
     """Annotation boxes of the complete trees and objects of a frame (partial ones are not annotated)."""
     boxes = [(t.u, t.v, t.w, t.h, t.species) for t in trees if t.complete]
     boxes += [(o.u, o.v, o.w, o.h, o.kind) for o in objects if o.complete]
     return tuple(boxes)
 
 
-def crop_candidates(rng, image, trees, objects, target_species, frame_index):
+def crop_candidates(rng: np.random.Generator, image: np.ndarray, trees: Sequence[TreeInView],
+                    objects: Sequence[ObjectInView], target_species: str, frame_index: int) -> list:
     """All crops one frame offers: positives, and negatives by category."""
     height, width = image.shape[:2]
     targets = [t for t in trees if t.complete and t.species in target_species]
@@ -152,7 +156,7 @@ def _contains(window, tree):
             and tree.v - tree.h / 2 >= y0 and tree.v + tree.h / 2 <= y0 + side)
 
 
-def negative_group(category):
+def negative_group(category: str) -> str:
     if category in ("partial", "background"):
         return category
     if category in ("roof", "road_cross"):
@@ -160,7 +164,8 @@ def negative_group(category):
     return "lookalike"
 
 
-def generate(seed, count, frame_count, target_species=("oil_palm",), camera=None, appearance=None):
+def generate(seed: int, count: int, frame_count: int, target_species: Sequence[str] = ("oil_palm",),
+             camera: CameraModel | None = None, appearance: Appearance | None = None) -> tuple[list, list, list]:
     """(positives, negatives, frames): count crops of each class and frame_count annotated frames.
 
     Deterministic for a seed. ``appearance`` (crowns.Appearance): photo crowns / ground photo for the scenes. Negatives follow NEGATIVE_QUOTAS, topped up from any category when one runs short.

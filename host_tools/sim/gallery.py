@@ -21,7 +21,7 @@ COLUMNS = 4
 LABEL_HEIGHT = 26
 
 
-def gallery(seed=3, size_m=0.4):
+def gallery(seed: int = 3, size_m: float = 0.4) -> np.ndarray:
     tiles = []
     for kind in KINDS:
         crop = render_specimen(kind, seed, size_m=size_m, yaw_deg=25.0)
@@ -37,7 +37,7 @@ def gallery(seed=3, size_m=0.4):
     return np.vstack(rows)
 
 
-def map1_frame(pose=Pose(1.86, 0.45, 1.25, 0.0)):
+def map1_frame(pose: Pose = Pose(1.86, 0.45, 1.25, 0.0)) -> np.ndarray:
     world = World.from_map(load_map("map1"))
     frame = world.render(CameraModel(), pose)
     boxed = frame.image.copy()
@@ -52,7 +52,7 @@ def map1_frame(pose=Pose(1.86, 0.45, 1.25, 0.0)):
     return np.hstack([frame.image, gap, boxed])
 
 
-def main(argv=None):
+def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", default="docs/img", help="output folder (default docs/img)")
     args = parser.parse_args(argv)

@@ -8,7 +8,7 @@ SOIL = np.array((70, 100, 125), np.float32)
 WEED_COLOURS = ((45, 130, 80), (35, 95, 60), (90, 160, 140), (60, 80, 95))
 
 
-def value_noise(rng, height, width, cells):
+def value_noise(rng: np.random.Generator, height: int, width: int, cells: int) -> np.ndarray:
     """Smooth noise in [0, 1]: a coarse random grid, interpolated up (cells = features across the width)."""
     cells_w = max(2, int(cells))
     cells_h = max(2, int(round(cells * height / max(width, 1))))
@@ -17,7 +17,8 @@ def value_noise(rng, height, width, cells):
     return np.clip(fine, 0.0, 1.0)
 
 
-def render_ground(rng, height, width, metres_per_pixel, light=1.0):
+def render_ground(rng: np.random.Generator, height: int, width: int, metres_per_pixel: float,
+                  light: float = 1.0) -> np.ndarray:
     """HxWx3 float32 BGR ground; feature sizes are in metres so it looks the same at any pixel scale.
 
     The colour field has no detail finer than a few centimetres, so it is computed at a quarter of the

@@ -8,19 +8,20 @@ import math
 
 import numpy as np
 
-from host_tools.sim.sprite import canvas_for
+from host_tools.sim.sprite import Sprite, canvas_for
 
 ROOF_COLOURS = ((55, 85, 185), (45, 60, 140), (140, 140, 135), (160, 110, 60), (110, 120, 150))
 ASPHALT = ((95, 95, 95), (80, 82, 85), (120, 150, 175))  # dark asphalt, older asphalt, dirt road
 MARKING = (225, 230, 230)
 
 
-def roof_footprint(size_m, aspect):
+def roof_footprint(size_m: float, aspect: float) -> tuple[float, float]:
     """Half extents (along, across) of a roof of the given size (the long side) and aspect (short/long)."""
     return size_m / 2.0, size_m * aspect / 2.0
 
 
-def render_roof(rng, centre_col, centre_row, size_px, aspect, yaw_img, light=1.0, sun_dir=(0.7, -0.7)):
+def render_roof(rng: np.random.Generator, centre_col: float, centre_row: float, size_px: float, aspect: float,
+                yaw_img: float, light: float = 1.0, sun_dir: tuple[float, float] = (0.7, -0.7)) -> Sprite:
     """A hip roof seen from above: four shaded facets with tile lines, ridge and hips."""
     canvas, centre, origin = canvas_for(centre_col, centre_row, size_px * 1.05)
     half_l, half_w = size_px / 2.0, size_px * aspect / 2.0
@@ -81,7 +82,8 @@ def _clip_line_to_polygon(polygon, normal, direction, offset):
     return hits[0], hits[-1]
 
 
-def render_road_cross(rng, centre_col, centre_row, size_px, yaw_img, light=1.0):
+def render_road_cross(rng: np.random.Generator, centre_col: float, centre_row: float, size_px: float, yaw_img: float,
+                      light: float = 1.0) -> Sprite:
     """Two (sometimes three) roads crossing, arms fading into the ground at the object's extent."""
     canvas, centre, origin = canvas_for(centre_col, centre_row, size_px * 1.45)
     half = size_px / 2.0

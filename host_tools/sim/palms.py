@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from host_tools.sim.sprite import canvas_for, radial_shading
+from host_tools.sim.sprite import Sprite, canvas_for, radial_shading
 
 
 @dataclass(frozen=True)
@@ -53,7 +53,8 @@ DATE_PALM = PalmStyle(
 STYLES = {"oil_palm": OIL_PALM, "coconut": COCONUT, "date_palm": DATE_PALM}
 
 
-def render_palm(style, rng, centre_col, centre_row, diameter_px, light=1.0, sun_dir=(0.7, -0.7)):
+def render_palm(style: PalmStyle, rng: np.random.Generator, centre_col: float, centre_row: float,
+                diameter_px: float, light: float = 1.0, sun_dir: tuple[float, float] = (0.7, -0.7)) -> Sprite:
     """Draw one palm crown of the given diameter centred at a continuous image position -> Sprite."""
     canvas, centre, origin = canvas_for(centre_col, centre_row, diameter_px)
     radius = diameter_px / 2.0

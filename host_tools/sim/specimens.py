@@ -6,13 +6,13 @@ import numpy as np
 
 from host_tools.maps import PlantationMap, Tree, WorldObject, SPECIES, OBJECT_KINDS
 from host_tools.sim.camera import CameraModel, Pose
-from host_tools.sim.world import NO_EFFECTS, World
+from host_tools.sim.world import NO_EFFECTS, Effects, World
 
 KINDS = SPECIES + OBJECT_KINDS + ("ground",)
 ALTITUDE_M = 1.25
 
 
-def specimen_map(kind, seed, size_m=None, yaw_deg=0.0):
+def specimen_map(kind: str, seed: int, size_m: float | None = None, yaw_deg: float = 0.0) -> PlantationMap:
     """A one-element map at the world origin: a tree of a species, an object, or only ground."""
     rng = np.random.default_rng([seed & 0xFFFFFFFF, 7])
     size = float(size_m if size_m is not None else rng.uniform(0.3, 0.45))
@@ -26,7 +26,9 @@ def specimen_map(kind, seed, size_m=None, yaw_deg=0.0):
     return PlantationMap("specimen " + kind, ALTITUDE_M, ((-0.1, 0.0), (0.1, 0.0)), trees, objs, int(seed))
 
 
-def render_specimen(kind, seed, size_m=None, window_factor=1.3, camera=None, yaw_deg=0.0, effects=NO_EFFECTS):
+def render_specimen(kind: str, seed: int, size_m: float | None = None, window_factor: float = 1.3,
+                    camera: CameraModel | None = None, yaw_deg: float = 0.0,
+                    effects: Effects = NO_EFFECTS) -> np.ndarray:
     """A square crop (BGR uint8) centred on one specimen, window = window_factor x its size, camera scale.
 
     ``effects`` (world.Effects) are applied to the camera frame before cropping, seeded by ``seed``.

@@ -5,10 +5,13 @@ whose colour is premultiplied by coverage (drawn on black) and a coverage mask d
 Positions are continuous pixel coordinates of the canvas: (0, 0) is the top-left corner of the top-left pixel.
 """
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import cv2
 import numpy as np
+
+Colour = Sequence[float]  # (b, g, r), 0-255
 
 SHIFT = 4  # fixed-point bits for sub-pixel drawing
 _ONE = 1 << SHIFT
@@ -25,12 +28,13 @@ class Sprite:
 class Canvas:
     """Colour + coverage drawn together; coordinates are continuous canvas pixels (float)."""
 
-    def __init__(self, size):
+    def __init__(self, size: int):
         self.size = int(size)
         self.colour = np.zeros((self.size, self.size, 3), np.uint8)
         self.mask = np.zeros((self.size, self.size), np.uint8)
 
-    def polylines(self, polylines, colour, thickness=1, closed=False):
+    def polylines(self, polylines: Sequence[np.ndarray], colour: Colour, thickness: int = 1,
+                  closed: bool = False) -> None:
         """Draw open polylines: a list of (N, 2) float arrays of (x, y) points."""
         if not len(polylines):
             return
@@ -38,30 +42,31 @@ class Canvas:
         cv2.polylines(self.colour, pts, closed, _bgr(colour), int(thickness), AA, SHIFT)
         cv2.polylines(self.mask, pts, closed, 255, int(thickness), AA, SHIFT)
 
-    def segments(self, starts, ends, colour, thickness=1):
+    def segments(self, starts: np.ndarray, ends: np.ndarray, colour: Colour, thickness: int = 1) -> None:
         """Draw many straight segments (arrays of shape (N, 2)) in one colour."""
         if len(starts) == 0:
             return
         pairs = np.stack([starts, ends], axis=1)  # (N, 2, 2)
         self.polylines(list(pairs), colour, thickness)
 
-    def polygon(self, points, colour):
+    def polygon(self, points: np.ndarray, colour: Colour) -> None:
         pts = _fixed(points)
         cv2.fillPoly(self.colour, [pts], _bgr(colour), AA, SHIFT)
         cv2.fillPoly(self.mask, [pts], 255, AA, SHIFT)
 
-    def circle(self, centre, radius, colour):
+    def circle(self, centre: Sequence[float], radius: float, colour: Colour) -> None:
         c = tuple(int(v) for v in np.round(np.asarray(centre) * _ONE))
         cv2.circle(self.colour, c, int(round(radius * _ONE)), _bgr(colour), -1, AA, SHIFT)
         cv2.circle(self.mask, c, int(round(radius * _ONE)), 255, -1, AA, SHIFT)
 
-    def ellipse(self, centre, axes, angle_deg, colour):
+    def ellipse(self, centre: Sequence[float], axes: Sequence[float], angle_deg: float, colour: Colour) -> None:
         c = tuple(int(v) for v in np.round(np.asarray(centre) * _ONE))
         a = tuple(max(1, int(round(v * _ONE))) for v in axes)
         cv2.ellipse(self.colour, c, a, float(angle_deg), 0, 360, _bgr(colour), -1, AA, SHIFT)
         cv2.ellipse(self.mask, c, a, float(angle_deg), 0, 360, 255, -1, AA, SHIFT)
 
-    def to_sprite(self, origin, blur_sigma=0.0, shading=None):
+    def to_sprite(self, origin: tuple[int, int], blur_sigma: float = 0.0,
+                  shading: np.ndarray | None = None) -> Sprite:
         """Finish: optional softening blur and a multiplicative shading field (HxW), as a Sprite."""
         alpha = self.mask.astype(np.float32) * (1.0 / 255.0)
         colour = self.colour.astype(np.float32)
@@ -75,7 +80,8 @@ class Canvas:
         return Sprite(colour, np.clip(alpha, 0.0, 1.0), origin)
 
 
-def canvas_for(centre_col, centre_row, diameter_px, pad=3):
+def canvas_for(centre_col: float, centre_row: float, diameter_px: float,
+               pad: int = 3) -> tuple[Canvas, np.ndarray, tuple[int, int]]:
     """A canvas big enough for a crown of diameter_px centred at a continuous image position.
 
     Returns (canvas, centre_in_canvas, origin) where origin is the integer image pixel of canvas (0, 0).
@@ -86,7 +92,7 @@ def canvas_for(centre_col, centre_row, diameter_px, pad=3):
     return Canvas(2 * half + 1), np.array(centre, dtype=float), origin
 
 
-def composite(image, sprite):
+def composite(image: np.ndarray, sprite: Sprite) -> None:
     """Alpha-composite a sprite onto a float32 HxWx3 image in place (clipped at the image border)."""
     h, w = image.shape[:2]
     ox, oy = sprite.origin
@@ -101,7 +107,7 @@ def composite(image, sprite):
     region += p
 
 
-def darken(image, mask, origin, strength):
+def darken(image: np.ndarray, mask: np.ndarray, origin: tuple[int, int], strength: float) -> None:
     """Multiply an image region by (1 - strength * mask): cast shadows."""
     h, w = image.shape[:2]
     ox, oy = origin
@@ -113,16 +119,17 @@ def darken(image, mask, origin, strength):
     image[y0:y1, x0:x1] *= (1.0 - strength * m)
 
 
-def radial_shading(size, centre, radius, sun_dir, strength):
+def radial_shading(size: int, centre: np.ndarray, radius: float, sun_dir: Sequence[float],
+                   strength: float) -> np.ndarray:
     """Brighter on the sun side, darker on the far side: 1 + strength * (p - c) . sun / radius."""
     ys, xs = np.mgrid[0:size, 0:size].astype(np.float32) + 0.5
     d = ((xs - centre[0]) * sun_dir[0] + (ys - centre[1]) * sun_dir[1]) / max(radius, 1e-6)
     return (1.0 + strength * np.clip(d, -1.0, 1.0)).astype(np.float32)
 
 
-def _fixed(points):
+def _fixed(points: np.ndarray) -> np.ndarray:
     return np.round(np.asarray(points, dtype=float) * _ONE).astype(np.int32).reshape(-1, 1, 2)
 
 
-def _bgr(colour):
+def _bgr(colour: Colour) -> tuple[int, int, int]:
     return tuple(int(max(0, min(255, round(c)))) for c in colour)

@@ -9,6 +9,7 @@ Mosaic layout: image up is world +x and image left is world +y (what a camera at
 mosaic pixel of world (x, y) is ((y_max - y) / mpp, (x_max - x) / mpp) in continuous coordinates.
 """
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
@@ -16,9 +17,9 @@ import cv2
 import numpy as np
 
 from host_tools.sim import broadleaf, crowns, ground, objects, palms
-from host_tools.maps import SPECIES
-from host_tools.sim.camera import METRES_PER_PIXEL_PER_METRE_AT_352
-from host_tools.sim.sprite import composite, darken
+from host_tools.maps import SPECIES, PlantationMap, Tree
+from host_tools.sim.camera import METRES_PER_PIXEL_PER_METRE_AT_352, CameraModel, Pose
+from host_tools.sim.sprite import Sprite, composite, darken
 
 SUPERSAMPLING = 2  # the finest level has twice the ground resolution of a 352x288 camera at the map altitude
 LEVELS = 4  # finest + 3 halvings: good down to 1/8 the resolution (8x the altitude)
@@ -70,10 +71,10 @@ class Effects:
     jpeg_quality: int = 0  # 0 = no compression round trip
 
     @property
-    def active(self):
+    def active(self) -> bool:
         return self.gain != 1.0 or self.blur_sigma > 0 or self.noise_sigma > 0 or self.jpeg_quality > 0
 
-    def apply(self, image, rng):
+    def apply(self, image: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         if self.gain != 1.0:
             image = cv2.convertScaleAbs(image, alpha=self.gain)
         if self.blur_sigma > 0:
@@ -108,7 +109,7 @@ NO_EFFECTS = Effects()
 SENSOR_EFFECTS = Effects(blur_sigma=0.6, noise_sigma=3.0, jpeg_quality=85)  # a plausible JeVois frame
 
 
-def random_effects(rng):
+def random_effects(rng: np.random.Generator) -> Effects:
     """Effects drawn at random for dataset variety (exposure, blur, noise, compression)."""
     # mostly sharp, as the JeVois is at 352x288 (a binned sensor); a heavy blur in one frame of eight
     return Effects(gain=float(rng.uniform(0.8, 1.2)),
@@ -123,7 +124,7 @@ class Lighting:
     shadow_per_height: float  # shadow length per metre of object height (cot of the sun's elevation)
 
     @classmethod
-    def random(cls, rng):
+    def random(cls, rng: np.random.Generator) -> "Lighting":
         azimuth = rng.uniform(0, 2 * math.pi)
         elevation = math.radians(rng.uniform(45, 80))
         return cls(float(rng.uniform(0.85, 1.15)), (math.cos(azimuth), math.sin(azimuth)),
@@ -133,7 +134,9 @@ class Lighting:
 class World:
     """An orthomosaic of one map with the ground truth needed to annotate frames."""
 
-    def __init__(self, pmap, levels, bounds, metres_per_pixel, seed, lighting, object_corners, photo_crowns=None):
+    def __init__(self, pmap: PlantationMap, levels: list[np.ndarray], bounds: tuple[float, float, float, float],
+                 metres_per_pixel: float, seed: int, lighting: Lighting, object_corners: list,
+                 photo_crowns: dict | None = None):
         self.map = pmap
         self.levels = levels  # [uint8 HxWx3], finest first, each half the previous
         self.bounds = bounds  # (x_min, x_max, y_min, y_max) metres
@@ -146,7 +149,7 @@ class World:
         self.photo_crowns = dict(photo_crowns or {})  # tree id -> "file.csv:line" of the photo crown drawn
 
     @property
-    def photo_species(self):
+    def photo_species(self) -> tuple[str, ...]:
         """The species of this map drawn from photographs (the others are drawn by the renderers)."""
         ids = set(self.photo_crowns)
         return tuple(s for s in SPECIES if any(t.species == s and t.id in ids for t in self.map.trees))
@@ -154,7 +157,9 @@ class World:
     # ---- building ------------------------------------------------------------------------------------
 
     @classmethod
-    def from_map(cls, pmap, seed=None, metres_per_pixel=None, margin_m=None, appearance=None, crown_trees=None):
+    def from_map(cls, pmap: PlantationMap, seed: int | None = None, metres_per_pixel: float | None = None,
+                 margin_m: float | None = None, appearance: crowns.Appearance | None = None,
+                 crown_trees: Sequence[Tree] | None = None) -> "World":
         """Render the map's orthomosaic once. ``seed`` overrides the map's seed (ground and tree variation).
 
         ``metres_per_pixel`` sets the finest level (default: half a 352x288 pixel at the map altitude; use a
@@ -191,7 +196,8 @@ class World:
 
     # ---- camera frames -------------------------------------------------------------------------------
 
-    def render(self, camera, pose, rng=None, effects=NO_EFFECTS):
+    def render(self, camera: CameraModel, pose: Pose, rng: np.random.Generator | None = None,
+               effects: Effects = NO_EFFECTS) -> Frame:
         """One camera frame at ``pose`` with the ground truth of the trees and objects in view.
 
         ``rng`` (numpy Generator) drives per-frame noise; when effects need it and none is given, a generator
@@ -207,7 +213,7 @@ class World:
             image = effects.apply(image, rng if rng is not None else np.random.default_rng(self.seed))
         return Frame(image, pose, self.trees_in_view(camera, pose), self.objects_in_view(camera, pose))
 
-    def trees_in_view(self, camera, pose):
+    def trees_in_view(self, camera: CameraModel, pose: Pose) -> list[TreeInView]:
         if not len(self._tree_crown):
             return []
         u, v = camera.world_to_pixel(pose, self._tree_xy[:, 0], self._tree_xy[:, 1])
@@ -218,7 +224,7 @@ class World:
                            bool(whole[i]), t.x, t.y)
                 for i, t in enumerate(self.map.trees) if seen[i]]
 
-    def objects_in_view(self, camera, pose):
+    def objects_in_view(self, camera: CameraModel, pose: Pose) -> list[ObjectInView]:
         out = []
         for index, (obj, corners) in enumerate(zip(self.map.objects, self._object_corners)):
             u, v = camera.world_to_pixel(pose, corners[:, 0], corners[:, 1])
@@ -249,7 +255,7 @@ class World:
         m[:, 2] += m[:, :2] @ np.array([0.5, 0.5]) - 0.5
         return m
 
-    def mosaic_pixel(self, x, y, level=0):
+    def mosaic_pixel(self, x: float, y: float, level: int = 0) -> tuple[float, float]:
         """Continuous mosaic pixel (col, row) of world (x, y) at a level (for pictures and tests)."""
         mpp = self.metres_per_pixel * 2 ** level
         return (self.bounds[3] - y) / mpp, (self.bounds[1] - x) / mpp
@@ -331,7 +337,8 @@ def _render_tree(tree, index, seed, mpp, to_px, lighting):
     return render_species(tree.species, rng, col, row, diameter, light, lighting.sun_dir)
 
 
-def render_species(species, rng, col, row, diameter_px, light=1.0, sun_dir=(0.7, -0.7)):
+def render_species(species: str, rng: np.random.Generator, col: float, row: float, diameter_px: float,
+                   light: float = 1.0, sun_dir: tuple[float, float] = (0.7, -0.7)) -> Sprite:
     """Draw one crown of a species centred at a continuous image position -> Sprite."""
     if species in palms.STYLES:
         return palms.render_palm(palms.STYLES[species], rng, col, row, diameter_px, light, sun_dir)

@@ -6,6 +6,7 @@ after the workers have started and imported the flight code (one warm-up flight 
 Prints flights per second for each, the speed-up, and flights per CPU-second (CPU of the worker processes
 while flying). The machine's load average is printed too: other work on the cores lowers the speed-up.
 """
+import argparse
 import json
 import os
 import time
@@ -36,7 +37,7 @@ def _timed(workers, specs, warmup):
             "flights_per_cpu_s": round(len(results) / cpu, 4) if cpu else None}
 
 
-def measure(camera="sim", count=DEFAULT_COUNT, seed=0):
+def measure(camera: str = "sim", count: int = DEFAULT_COUNT, seed: int = 0) -> dict:
     specs = make_specs(count, seed, camera=camera)
     warmup = [dict(s, index=10 ** 6 + s["index"]) for s in make_specs(2, seed + 1, camera=camera)]
     load0 = os.getloadavg()[0]
@@ -47,7 +48,7 @@ def measure(camera="sim", count=DEFAULT_COUNT, seed=0):
             "load_average_after": round(os.getloadavg()[0], 2)}
 
 
-def run(args):
+def run(args: argparse.Namespace) -> int:
     result = measure(getattr(args, "camera", None) or "sim", getattr(args, "count", None) or DEFAULT_COUNT,
                      getattr(args, "seed", 0))
     if getattr(args, "json", False):

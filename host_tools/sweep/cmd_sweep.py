@@ -23,23 +23,32 @@ Examples:
   foranav sweep --count 50 --seed 3 --out runs/s --camera oracle --scheduler tcp://127.0.0.1:8786
   foranav sweep --out runs/sweep-sim --report-only
 """
+import argparse
 import dataclasses
 import json
 import sys
 import time
+from typing import TextIO
 from pathlib import Path
 
 from host_tools import argtypes, fileio
+from host_tools.cmd_plantation import add_range_arguments, ranges_from_args
 from host_tools.errors import ForaNavError
+from host_tools.flight.vision_camera import model_option
+from host_tools.maps import SPECIES
+from host_tools.plantation import PlantationRanges
+from host_tools.sim.cli_args import appearance_from_args
+from host_tools.sweep import report as report_mod
+from host_tools.sweep.conditions import FAULT_PRESETS, preset
+from host_tools.sweep.runner import run_sweep
+from host_tools.sweep.specs import make_specs
+from host_tools.sweep.store import SweepStore
 
 PROGRESS_EVERY_S = 10.0  # without a terminal: one progress line this often
 BAR_WIDTH = 30
 
 
-def add_arguments(parser):
-    from host_tools.cmd_plantation import add_range_arguments
-    from host_tools.sweep.conditions import FAULT_PRESETS
-
+def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--count", type=argtypes.int_range(1, 10_000_000), default=None, help="number of flights (required unless --report-only)")
     parser.add_argument("--seed", type=argtypes.seed, default=0, help="sweep seed (default 0)")
     parser.add_argument("--out", required=True, help="sweep folder: store, report, maps of the worst flights")
@@ -67,9 +76,6 @@ def add_arguments(parser):
 
 def _fly_arguments(args):
     """The ``foranav fly`` arguments every flight of the sweep gets (paths absolute, files checked now)."""
-    from host_tools.flight.vision_camera import model_option
-    from host_tools.maps import SPECIES
-    from host_tools.sim.cli_args import appearance_from_args
 
     words = []
     if args.app != "python":
@@ -98,10 +104,10 @@ def _overrides(texts):
     return out
 
 
-class ProgressBar(object):
+class ProgressBar:
     """Flights done, rate and ETA on stderr: redrawn in place on a terminal, a line every 10 s otherwise."""
 
-    def __init__(self, total, skipped, stream=None):
+    def __init__(self, total: int, skipped: int, stream: TextIO | None = None):
         self.total, self.skipped = total, skipped
         self.stream = stream or sys.stderr
         self.tty = self.stream.isatty()
@@ -132,15 +138,7 @@ def _duration(seconds):
         "%dm%02ds" % (seconds // 60, seconds % 60)
 
 
-def run(args):
-    from host_tools.cmd_plantation import ranges_from_args
-    from host_tools.plantation import PlantationRanges
-    from host_tools.sweep import report as report_mod
-    from host_tools.sweep.conditions import preset
-    from host_tools.sweep.runner import run_sweep
-    from host_tools.sweep.specs import make_specs
-    from host_tools.sweep.store import SweepStore
-
+def run(args: argparse.Namespace) -> int:
     if args.report_only:
         store = SweepStore(args.out, create=False)
         counts = None

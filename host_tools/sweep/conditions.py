@@ -23,7 +23,13 @@ Camera defaults: sim 9 fps, one frame of latency, no added pixel noise (the rend
 noise); oracle 10 fps, 50 ms, 1.5 px. A preset can be narrowed or widened per condition with explicit
 ranges (``overrides``: name -> (lo, hi); estimator: the flow probability).
 """
+import argparse
+from collections.abc import Sequence
+
+import numpy as np
+
 from host_tools.errors import ForaNavError
+from host_tools.flight import cmd_fly, oracle, vision_camera
 
 FAULT_PRESETS = {
     "none": {},
@@ -39,7 +45,7 @@ CONDITION_NAMES = ("dropout", "pixel_noise_px", "latency_frames", "fps", "wind_m
 CAMERAS = ("sim", "oracle")
 
 
-def preset(name, overrides=None):
+def preset(name: str, overrides: dict | None = None) -> dict:
     """The distributions of preset ``name`` with ``overrides`` applied (ForaNavError on a bad one)."""
     if name not in FAULT_PRESETS:
         raise ForaNavError("--faults: unknown preset %r (have %s)" % (name, ", ".join(FAULT_PRESETS)))
@@ -63,7 +69,7 @@ def preset(name, overrides=None):
     return spec
 
 
-def draw(rng, distributions, camera):
+def draw(rng: np.random.Generator, distributions: dict, camera: str) -> dict:
     """One flight's conditions (a dict of plain values) from ``distributions`` (see ``preset``)."""
     if camera not in CAMERAS:
         raise ForaNavError("--camera %s: a sweep flies sim or oracle" % camera)
@@ -92,20 +98,16 @@ def draw(rng, distributions, camera):
     return out
 
 
-def _scaled(unit, lo_hi, digits):
+def _scaled(unit: float, lo_hi: tuple[float, float], digits: int) -> float:
     lo, hi = lo_hi
     return round(lo + unit * (hi - lo), digits)
 
 
-def _default_period(camera):
-    if camera == "sim":
-        from host_tools.flight.vision_camera import DEFAULT_FRAME_PERIOD_MS
-        return DEFAULT_FRAME_PERIOD_MS
-    from host_tools.flight.oracle import DEFAULT_FRAME_PERIOD_MS
-    return DEFAULT_FRAME_PERIOD_MS
+def _default_period(camera: str) -> int:
+    return vision_camera.DEFAULT_FRAME_PERIOD_MS if camera == "sim" else oracle.DEFAULT_FRAME_PERIOD_MS
 
 
-def fly_arguments(conditions):
+def fly_arguments(conditions: dict) -> list[str]:
     """The ``foranav fly`` options that reproduce ``conditions`` (list of strings, in a fixed order)."""
     args = []
     if conditions.get("dropout"):
@@ -126,14 +128,10 @@ def fly_arguments(conditions):
     return args
 
 
-def harness_inputs(conditions, camera, extra_arguments=()):
+def harness_inputs(conditions: dict, camera: str, extra_arguments: Sequence[str] = ()) -> tuple[dict, dict]:
     """(camera_kwargs, options) for harness.fly, built by ``foranav fly``'s own option code from
     ``fly_arguments(conditions)`` and the sweep's ``extra_arguments`` (``--app``, ``--model``, ``--crowns``):
     one definition, so the replay command flies exactly the same flight."""
-    import argparse
-
-    from host_tools.flight import cmd_fly
-
     parser = argparse.ArgumentParser(prog="foranav fly")
     cmd_fly.add_arguments(parser)
     args = parser.parse_args(["--map", "-", "--camera", camera] + fly_arguments(conditions) + list(extra_arguments))

@@ -9,9 +9,13 @@ visited, nothing "reached" where there is no tree, no watchdog event, mission co
 repeated target, non-target visited, reached nothing (a reach 0.3 m from every tree), watchdog.
 """
 import math
+import os
+from collections.abc import Sequence
 from pathlib import Path
 
 from host_tools import fileio
+from host_tools.plantation import PlantationRanges
+from host_tools.plotting import plt
 from host_tools.sweep.specs import fly_command, plantation_command
 
 Z95 = 1.959964
@@ -41,7 +45,7 @@ FACTORS = {
 }
 
 
-def wilson(successes, n, z=Z95):
+def wilson(successes: int, n: int, z: float = Z95) -> tuple[float, float]:
     """Wilson score interval (lo, hi) of a binomial proportion; (None, None) for n = 0."""
     if n == 0:
         return None, None
@@ -52,7 +56,7 @@ def wilson(successes, n, z=Z95):
     return max(0.0, centre - half), min(1.0, centre + half)
 
 
-def failure_classes(row):
+def failure_classes(row: dict) -> list[str]:
     """The failure classes of one stored flight (empty for a flawless one)."""
     if row["status"] != "ok":
         return ["crash"]
@@ -75,7 +79,7 @@ def failure_classes(row):
     return out
 
 
-def flawless(row):
+def flawless(row: dict) -> bool:
     return row["status"] == "ok" and bool(row["summary"]["success"])
 
 
@@ -99,7 +103,7 @@ def _bin_label(value, edges):
     return ">= %g" % edges[-1] if value >= edges[-1] else "< %g" % edges[0]
 
 
-def rates_by_factor(rows):
+def rates_by_factor(rows: Sequence[dict]) -> dict[str, list[dict]]:
     """{factor: [{bin, flights, flawless, rate, lo, hi}]} for every factor that varies in ``rows``."""
     out = {}
     for name, (_, edges) in FACTORS.items():
@@ -148,7 +152,8 @@ def _badness(row):
     return (row["status"] != "ok", len(classes), s.get("max_deviation_m") or 0.0)
 
 
-def build_report(rows, out_dir, identity=None, ranges=None):
+def build_report(rows: Sequence[dict], out_dir: str | os.PathLike, identity: dict | None = None,
+                 ranges: PlantationRanges | None = None) -> dict:
     out_dir = Path(out_dir)
     n = len(rows)
     ok = sum(1 for r in rows if flawless(r))
@@ -197,7 +202,7 @@ def build_report(rows, out_dir, identity=None, ranges=None):
     }
 
 
-def write_report(report, rows, out_dir):
+def write_report(report: dict, rows: Sequence[dict], out_dir: str | os.PathLike) -> None:
     """report.md, deviations.png, rates.png and the worst flights' maps under out_dir/maps/."""
     out_dir = Path(out_dir)
     by_index = {r["index"]: r for r in rows}
@@ -208,7 +213,7 @@ def write_report(report, rows, out_dir):
     fileio.write_text(out_dir / "report.md", markdown(report))
 
 
-def headline(report):
+def headline(report: dict) -> str:
     """The headline table (markdown) of a report."""
     lo, hi = report["wilson95"]
     dev = report["deviation_m"]
@@ -230,7 +235,7 @@ def _num(x):
     return "-" if x is None else "%.3f" % x
 
 
-def markdown(report):
+def markdown(report: dict) -> str:
     out = ["# Sweep report", ""]
     sweep = report["sweep"]
     if sweep:
@@ -271,10 +276,6 @@ def markdown(report):
 
 
 def _plot_deviations(rows, path):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     deviations = [reach["deviation_m"] for r in rows if r["status"] == "ok"
                   for reach in r["summary"]["reached"] if reach["id"] in set(r["summary"]["targets"])]
     fig, ax = plt.subplots(figsize=(6, 3.2), dpi=110)
@@ -286,16 +287,11 @@ def _plot_deviations(rows, path):
     ax.set_ylabel("reaches")
     ax.set_title("Deviation distribution (%d reaches, %d flights)" % (len(deviations), len(rows)), fontsize=10)
     fig.tight_layout()
-    with fileio.atomic_path(path) as tmp:
-        fig.savefig(tmp)
+    fileio.write_figure(fig, path)
     plt.close(fig)
 
 
 def _plot_rates(report, path):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     tables = report["rates_by_factor"]
     n = max(len(tables), 1)
     cols = 3
@@ -315,6 +311,5 @@ def _plot_rates(report, path):
         ax.axis("off")
     fig.suptitle("Flawless rate (%) by factor, 95 % Wilson intervals", fontsize=10)
     fig.tight_layout()
-    with fileio.atomic_path(path) as tmp:
-        fig.savefig(tmp)
+    fileio.write_figure(fig, path)
     plt.close(fig)

@@ -11,17 +11,19 @@ import os
 import platform
 import time
 import traceback
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import cv2
 
 from host_tools.errors import ForaNavError
+from host_tools.flight.harness import fly
+from host_tools.sweep.conditions import harness_inputs
+from host_tools.sweep.store import SweepStore
 
 
-def fly_task(spec):
+def fly_task(spec: dict) -> dict:
     """Fly one spec (a Dask task) -> result dict: index, spec, status, summary | traceback, cpu_s, wall_s."""
-    import cv2
-
-    from host_tools.flight.harness import fly
-    from host_tools.sweep.conditions import harness_inputs
-
     # one OpenCV thread per worker process: the workers already fill the cores, and idle OpenCV threads
     # spinning on a shared machine cost CPU; results do not depend on it
     cv2.setNumThreads(1)
@@ -41,10 +43,10 @@ def fly_task(spec):
     return result
 
 
-def open_client(scheduler=None, workers=None):
+def open_client(scheduler: str | None = None, workers: int | None = None) -> tuple[Any, Any]:
     """(client, cluster): a Client of the running cluster at ``scheduler``, or of a new LocalCluster of
     ``workers`` single-threaded processes (cluster is then returned so the caller can close it)."""
-    try:
+    try:  # here, not at the top: dask is needed only to fly a sweep (and takes ~1 s to import)
         from dask.distributed import Client, LocalCluster
     except ImportError:
         raise ForaNavError("foranav sweep needs dask.distributed: pip install 'dask[distributed]'")
@@ -59,9 +61,9 @@ def open_client(scheduler=None, workers=None):
     return Client(cluster), cluster
 
 
-def fly_on(client, specs, on_result, key_prefix="flight"):
+def fly_on(client: Any, specs: Sequence[dict], on_result: Callable[[dict], None], key_prefix: str = "flight") -> None:
     """Submit one task per spec; call ``on_result(result)`` as each finishes (any order)."""
-    from dask.distributed import as_completed
+    from dask.distributed import as_completed  # with open_client's import: dask only for a sweep
 
     futures = {client.submit(fly_task, spec, key="%s-%06d" % (key_prefix, spec["index"]), pure=False): spec
                for spec in specs}
@@ -74,7 +76,8 @@ def fly_on(client, specs, on_result, key_prefix="flight"):
         on_result(result)
 
 
-def run_sweep(specs, store, *, scheduler=None, workers=None, progress=None):
+def run_sweep(specs: Sequence[dict], store: SweepStore, *, scheduler: str | None = None, workers: int | None = None,
+              progress: Callable[..., None] | None = None) -> dict:
     """Fly the specs not yet in ``store`` -> {"skipped", "flown", "failed", "wall_s"}."""
     finished = store.finished()
     todo = [s for s in specs if s["index"] not in finished]

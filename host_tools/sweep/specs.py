@@ -9,7 +9,9 @@ Flight i of a sweep is the same whatever the count, the order or the number of w
 extended (a larger --count) or resumed.
 """
 import dataclasses
+import os
 import shlex
+from collections.abc import Sequence
 
 import numpy as np
 
@@ -20,7 +22,9 @@ from host_tools.sweep import conditions as cond
 SEED_LIMIT = 2 ** 31 - 1
 
 
-def flight_spec(sweep_seed, index, *, faults="none", camera="sim", ranges=None, overrides=None, fly_args=()):
+def flight_spec(sweep_seed: int, index: int, *, faults: str = "none", camera: str = "sim",
+                ranges: PlantationRanges | None = None, overrides: dict | None = None,
+                fly_args: Sequence[str] = ()) -> dict:
     """Spec of flight ``index`` of the sweep with ``sweep_seed``; ``fly_args``: the sweep's own ``foranav fly``
     arguments for every flight (``--app c``, ``--model M``, ``--crowns CSV ...``), replayed with it."""
     rng = np.random.default_rng([int(sweep_seed), int(index), 0x5EE9])
@@ -36,13 +40,15 @@ def flight_spec(sweep_seed, index, *, faults="none", camera="sim", ranges=None, 
     return spec
 
 
-def make_specs(count, sweep_seed, *, faults="none", camera="sim", ranges=None, overrides=None, fly_args=()):
+def make_specs(count: int, sweep_seed: int, *, faults: str = "none", camera: str = "sim",
+               ranges: PlantationRanges | None = None, overrides: dict | None = None,
+               fly_args: Sequence[str] = ()) -> list[dict]:
     return [flight_spec(sweep_seed, i, faults=faults, camera=camera, ranges=ranges, overrides=overrides,
                         fly_args=fly_args)
             for i in range(int(count))]
 
 
-def ranges_arguments(ranges):
+def ranges_arguments(ranges: PlantationRanges | None) -> list[str]:
     """The ``foranav plantation`` options that give ``ranges`` (only those that differ from the defaults)."""
     default = PlantationRanges()
     args = []
@@ -53,14 +59,14 @@ def ranges_arguments(ranges):
     return args
 
 
-def fly_command(spec, map_path):
+def fly_command(spec: dict, map_path: str | os.PathLike) -> str:
     """The exact ``foranav fly`` command that replays this flight (its map written at ``map_path``)."""
     words = ["foranav", "fly", "--map", str(map_path), "--camera", spec["camera"], "--seed", str(spec["seed"])]
     words += cond.fly_arguments(spec["conditions"]) + list(spec.get("fly_args", ()))
     return " ".join(shlex.quote(w) for w in words)
 
 
-def plantation_command(spec, map_path, ranges=None):
+def plantation_command(spec: dict, map_path: str | os.PathLike, ranges: PlantationRanges | None = None) -> str:
     """The ``foranav plantation`` command that writes this flight's map."""
     words = ["foranav", "plantation", "--seed", str(spec["plantation_seed"])]
     words += ranges_arguments(ranges or PlantationRanges()) + ["--out", str(map_path)]

@@ -12,8 +12,10 @@ Only the client process writes (Dask workers return results to it); each row is 
 killed sweep loses only the flights that were in flight.
 """
 import json
+import os
 import sqlite3
 import time
+from collections.abc import Iterable, Sequence
 from pathlib import Path
 
 from host_tools.errors import ForaNavError
@@ -29,8 +31,8 @@ CREATE TABLE IF NOT EXISTS runs (run INTEGER PRIMARY KEY AUTOINCREMENT, started_
 """
 
 
-class SweepStore(object):
-    def __init__(self, out_dir, *, create=True):
+class SweepStore:
+    def __init__(self, out_dir: str | os.PathLike, *, create: bool = True):
         self.path = Path(out_dir) / FILENAME
         if not create and not self.path.exists():
             raise ForaNavError("%s: no sweep store here (run foranav sweep --out %s first)" % (self.path, out_dir))
@@ -40,18 +42,18 @@ class SweepStore(object):
         self.db.commit()
         self.run = None
 
-    def close(self):
+    def close(self) -> None:
         self.db.close()
 
-    def __enter__(self):
+    def __enter__(self) -> "SweepStore":
         return self
 
-    def __exit__(self, *exc):
+    def __exit__(self, *exc: object) -> None:
         self.close()
 
     # -- identity ------------------------------------------------------------------------------------------
 
-    def check_identity(self, identity):
+    def check_identity(self, identity: dict) -> None:
         """Record ``identity`` (a dict) on first use; refuse a different one later (ForaNavError)."""
         rows = dict(self.db.execute("SELECT key, value FROM meta"))
         wanted = {k: json.dumps(v, sort_keys=True) for k, v in identity.items()}
@@ -64,25 +66,25 @@ class SweepStore(object):
                 raise ForaNavError("%s: holds a sweep with %s %s, not %s (use another --out)"
                                    % (self.path, key, rows.get(key), value))
 
-    def identity(self):
+    def identity(self) -> dict:
         return {k: json.loads(v) for k, v in self.db.execute("SELECT key, value FROM meta")}
 
     # -- runs and rows -------------------------------------------------------------------------------------
 
-    def start_run(self, argv):
+    def start_run(self, argv: Sequence[str]) -> int:
         cur = self.db.execute("INSERT INTO runs (started_at, argv) VALUES (?, ?)", (time.time(), json.dumps(argv)))
         self.db.commit()
         self.run = cur.lastrowid
         return self.run
 
-    def record_attempts(self, indices):
+    def record_attempts(self, indices: Iterable[int]) -> None:
         self.db.executemany("INSERT INTO attempts VALUES (?, ?)", [(self.run, int(i)) for i in indices])
         self.db.commit()
 
-    def finished(self):
+    def finished(self) -> set[int]:
         return {row[0] for row in self.db.execute("SELECT idx FROM flights")}
 
-    def put(self, result):
+    def put(self, result: dict) -> None:
         """Store one flight's result (the dict runner.fly_task returns) in its own transaction."""
         self.db.execute(
             "INSERT OR REPLACE INTO flights VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
@@ -92,7 +94,7 @@ class SweepStore(object):
              time.time(), self.run))
         self.db.commit()
 
-    def rows(self):
+    def rows(self) -> list[dict]:
         """Every stored flight as a dict (spec and summary decoded), by index."""
         out = []
         for idx, spec, status, summary, tb, cpu, wall, worker, finished, run in self.db.execute(
@@ -102,7 +104,7 @@ class SweepStore(object):
                         "cpu_s": cpu, "wall_s": wall, "worker": worker, "finished_at": finished, "run": run})
         return out
 
-    def attempts(self):
+    def attempts(self) -> dict[int, list[int]]:
         """{run: [idx, ...]} of the flights each run submitted."""
         out = {}
         for run, idx in self.db.execute("SELECT run, idx FROM attempts ORDER BY run, idx"):
