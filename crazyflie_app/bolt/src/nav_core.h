@@ -128,9 +128,8 @@ typedef struct {
   int32_t tree_id;
   double x, y;
   double a, b;     /* s_t (reached), e_d (recovery), silence in s (link events) */
-  int32_t n;       /* phase entered, waypoint index, ms not seen */
+  int32_t n;       /* phase entered, waypoint index, ms not seen, the reached twin's id (tree_absorbed) */
   int32_t variant; /* recovery: 1 e_d, 0 not seen; link_lost: 1 landing, 0 holding; abandoned: 1 revisit */
-                   /* (n is also the reached twin's id of tree_absorbed) */
 } NavEvent;
 
 typedef struct {

@@ -10,6 +10,7 @@ import subprocess
 import pytest
 
 from crazyflie_app import c_core
+from crazyflie_app.nav_types import POSE_HISTORY_LENGTH
 
 CORE_SOURCES = tuple(name for name in c_core.SOURCES if name != "nav_host.c")  # nav_host.c: host only
 BOLT_DEFINES = ("-DNAV_NO_PRINTF_FLOAT", "-DNAV_NO_STRTOD")
@@ -98,8 +99,6 @@ def test_that_the_committed_bolt_path_is_map1s_and_a_bad_map_is_refused(tmp_path
 
 def test_that_the_c_core_keeps_as_much_pose_history_as_the_python_core():
     # with 48 ticks against Python's 128 the cores chose different setpoints for a target last seen 0.5 s ago
-    from crazyflie_app.nav_types import POSE_HISTORY_LENGTH
-
     header = (c_core.SOURCE_DIR / "nav_core.h").read_text()
     defined = re.search(r"^#define NAV_POSE_HISTORY (\d+)", header, re.M)
     assert defined is not None and int(defined.group(1)) == POSE_HISTORY_LENGTH
