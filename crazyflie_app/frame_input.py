@@ -1,6 +1,7 @@
 """Camera input of the navigation core: one frame's detections (their ground points, at the pose of capture)
-are merged when they are one crown seen twice, associated with T_d or the visited list (``T_d``: within
-``mergeRadius``), and new trees admitted by the planting-column rule of the current segment.
+are merged when they are one crown seen twice, associated with T_d or the visited list (within
+``mergeRadius``, or ``dupRadius`` outside the planting column), and new trees admitted by the planting-column
+rule of the current segment.
 
 * A tree enters T_d when seen inside the planting column of the *current* segment (orthogonal distance
   <= ``columnFactor`` x ``crownSize``); after ``minHits`` detections the nearest such tree becomes the target t*.
@@ -34,7 +35,8 @@ class FrameInput:
         p = self.params
         merged, owner = merge_duplicates(detections, points, p.duplicate_radius_m)
         self.counters.duplicates += len(detections) - len(merged)
-        assignment = self.memory.associate([point for _, point in merged], p.merge_radius_m)
+        points = [point for _, point in merged]
+        assignment = self.memory.associate(points, [self.association_radius(x, y) for x, y in points])
         protected = {tree_id for kind, tree_id in assignment if kind == "tree"}
         merged_ids = []
         for (det, (wx, wy)), (kind, tree_id) in zip(merged, assignment):
@@ -45,6 +47,19 @@ class FrameInput:
             merged_ids.append(tree_id)
         self.counters.detections += len(detections)
         return [merged_ids[k] for k in owner]
+
+    def association_radius(self, x: float, y: float) -> float:
+        """How far from a stored tree a detection at (x, y) may be and still be that tree.
+
+        Inside the planting column, ``mergeRadius``. Outside it, only ``dupRadius``: such a detection is
+        either a stored tree near the column's edge, seen again a few cm off, or a tree the column rule never
+        admitted. The latter must not pass for a stored neighbour: on a turn segment the next column's first
+        tree (0.36 m from the target, outside the turn's column) otherwise took the target's place in every
+        frame that dropped the target's own detection, and the target's filter never settled."""
+        p = self.params
+        if self.route.in_planting_column(x, y):
+            return p.merge_radius_m
+        return min(p.merge_radius_m, p.duplicate_radius_m)
 
     def _take_detection(self, t_ms, det, wx, wy, kind, tree_id, protected, mav_xy, events, evicted):
         """One (de-duplicated) detection -> (the id of its tree, 0: ignored; whether it is in T_d)."""

@@ -12,8 +12,9 @@ that ``removeCoordinate`` shifted). Both collections are bounded, and overflow i
   forgotten and counted in ``visited_forgotten`` (the C app wrote past the end of ``treeBlacklist[10]``).
 
 Association is nearest-neighbour with exclusivity per camera frame: each detection of a frame goes to the
-nearest stored *or visited* tree within the merge radius, and no two detections of one frame go to the same
-tree (two trees seen together are two trees, even 0.47 m apart in a cluster). One crown seen twice in one
+nearest stored *or visited* tree within its radius (the caller's choice per detection: frame_input), and no
+two detections of one frame go to the same tree (two trees seen together are two trees, even 0.47 m apart in
+a cluster). One crown seen twice in one
 frame (two detector windows closer than ``app.dupRadius``) is merged by the core before association
 (``camera_geometry.merge_duplicates``).
 
@@ -74,10 +75,11 @@ class TreeMemory:
     def get(self, tree_id: int) -> StoredTree | None:
         return self.trees.get(tree_id)
 
-    def associate(self, points: Sequence[Point], merge_radius: float) -> list[tuple[str | None, int | None]]:
-        """For each world point (x, y) of one frame: ('tree', id), ('visited', id) or (None, None)."""
+    def associate(self, points: Sequence[Point], radii: Sequence[float]) -> list[tuple[str | None, int | None]]:
+        """For each world point (x, y) of one frame: ('tree', id), ('visited', id) or (None, None); point i
+        goes only to a tree within ``radii[i]`` of it."""
         pairs = []
-        for i, (px, py) in enumerate(points):
+        for i, ((px, py), merge_radius) in enumerate(zip(points, radii)):
             for t in self.trees.values():
                 d = math.hypot(px - t.x, py - t.y)
                 if d <= merge_radius:

@@ -107,6 +107,30 @@ def test_that_the_column_rule_uses_the_current_segment():
     assert core.in_planting_column(2.0, -0.9) and not core.in_planting_column(2.0, 0.2)
 
 
+def test_that_a_tree_the_column_rule_left_out_does_not_pass_for_a_stored_neighbour():
+    # moderate sweep flight 59, a turn segment: the target 0.40 m off the segment, the next column's first tree
+    # 0.365 m beyond it (0.765 m off, never admitted). A frame that drops the target's own detection must not
+    # hand the neighbour's detection to the target (its filter then never settled and it was abandoned)
+    world = World([(0.3, -0.40), (0.3, -0.765)], start=(0.0, -0.3))  # both in view
+    world.core.on_frame(world.t, world.frame(), world.pose())
+    (target,) = world.core.memory.trees.values()
+    stored_at = (target.x, target.y, target.hits)
+    world.hidden = {0}
+    assert world.core.on_frame(world.t + FRAME_MS, world.frame(), world.pose()) == [0]
+    assert (target.x, target.y, target.hits) == stored_at
+    assert world.core.counters.out_of_column == 2
+
+
+def test_that_a_stored_tree_seen_just_outside_the_column_is_still_that_tree():
+    # a crown 0.50 m off the path, its detection 0.54 m off (outside the 0.525 m column): the same tree
+    world = World([(0.3, 0.50)])
+    world.core.on_frame(world.t, world.frame(), world.pose())
+    (tree,) = world.core.memory.trees.values()
+    world.trees = [(0.3, 0.54)]
+    assert world.core.on_frame(world.t + FRAME_MS, world.frame(), world.pose()) == [tree.id]
+    assert tree.hits == 2
+
+
 def test_that_the_servo_law_saturates_without_turning():
     vx, vy = servo_velocity(0.3, -0.4, gain=1.0, max_speed=0.1)
     assert math.hypot(vx, vy) == pytest.approx(0.1)

@@ -15,18 +15,18 @@ def add(memory, x, y, t=0):
 def test_that_a_detection_within_the_merge_radius_is_the_same_tree_and_refines_it():
     sut = TreeMemory()
     tree_id = add(sut, 1.0, 0.5)
-    assert sut.associate([(1.1, 0.5)], MERGE_RADIUS) == [("tree", tree_id)]
+    assert sut.associate([(1.1, 0.5)], [MERGE_RADIUS]) == [("tree", tree_id)]
     sut.update(tree_id, 1.1, 0.5, 100, 170.0, 140.0)
     tree = sut.get(tree_id)
     assert tree.hits == 2 and tree.x == pytest.approx(1.05) and tree.last_ms == 100
-    assert sut.associate([(1.6, 0.5)], MERGE_RADIUS) == [(None, None)]
+    assert sut.associate([(1.6, 0.5)], [MERGE_RADIUS]) == [(None, None)]
 
 
 def test_that_two_detections_of_one_frame_never_merge_into_one_tree():
     # a cluster: trees 0.47 m apart, the second one's estimate lands 0.40 m from the first stored tree
     sut = TreeMemory()
     first = add(sut, 2.30, 0.40)
-    result = sut.associate([(2.32, 0.41), (2.70, 0.52)], MERGE_RADIUS)
+    result = sut.associate([(2.32, 0.41), (2.70, 0.52)], [MERGE_RADIUS] * 2)
     assert result[0] == ("tree", first)
     assert result[1] == (None, None)
 
@@ -37,8 +37,8 @@ def test_that_a_detection_goes_to_the_nearest_of_stored_and_visited_trees():
     neighbour = add(sut, 2.74, 0.56)
     sut.mark_visited(visited, 1000, MAV)
     # 0.42 m from the visited tree, 0.05 m from its neighbour: it is the neighbour
-    assert sut.associate([(2.70, 0.53)], MERGE_RADIUS) == [("tree", neighbour)]
-    assert sut.associate([(2.31, 0.41)], MERGE_RADIUS) == [("visited", visited)]
+    assert sut.associate([(2.70, 0.53)], [MERGE_RADIUS]) == [("tree", neighbour)]
+    assert sut.associate([(2.31, 0.41)], [MERGE_RADIUS]) == [("visited", visited)]
 
 
 def test_that_ids_stay_valid_when_another_tree_is_removed():

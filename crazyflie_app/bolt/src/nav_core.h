@@ -228,6 +228,7 @@ typedef struct {
   /* per-frame scratch (kept here, not on the camera task's stack) */
   NavDetection merged[NAV_MAX_FRAME_DETECTIONS];
   double merged_points[NAV_MAX_FRAME_DETECTIONS][2];
+  double association_radii[NAV_MAX_FRAME_DETECTIONS];
   int32_t merged_counts[NAV_MAX_FRAME_DETECTIONS];
   int32_t owner[NAV_MAX_FRAME_DETECTIONS];
   int32_t merged_ids[NAV_MAX_FRAME_DETECTIONS];
@@ -289,8 +290,9 @@ void navKalmanUpdate(NavKalman* kf, double u, double v);
 /* -- nav_trees.c -- */
 void navTreesInit(NavTreeMemory* memory, int32_t capacity, int32_t visited_capacity);
 NavTree* navTreesGet(NavTreeMemory* memory, int32_t id);
-void navTreesAssociate(const NavTreeMemory* memory, const double (*points)[2], int32_t count,
-                       double merge_radius, NavAssociation* result);
+/* Point i goes to the nearest free stored or visited tree within radii[i] (exclusive per frame). */
+void navTreesAssociate(const NavTreeMemory* memory, const double (*points)[2], const double* radii,
+                       int32_t count, NavAssociation* result);
 /* Returns the new id, or 0 when T_d is full of protected trees (ids a detection of this frame refers to;
  * counted in unstored); evicted ids go to evicted[] (at most NAV_MAX_TREES), their count to *num_evicted. */
 int32_t navTreesAdd(NavTreeMemory* memory, double x, double y, int32_t t_ms, double u, double v,

@@ -74,6 +74,16 @@ static void absorbReached(NavCore* core, int32_t t_ms) {
   }
 }
 
+/* FrameInput.association_radius: outside the planting column only dupRadius, so a tree the column rule never
+ * admitted (the next column's first tree on a turn) cannot pass for a stored neighbour. */
+static double associationRadius(const NavCore* core, double x, double y) {
+  const NavParams* p = &core->params;
+  if (navInPlantingColumn(core, x, y)) {
+    return p->merge_radius_m;
+  }
+  return p->duplicate_radius_m < p->merge_radius_m ? p->duplicate_radius_m : p->merge_radius_m;
+}
+
 int32_t navCoreOnFrame(NavCore* core, int32_t t_ms, const NavDetection* detections, int32_t count,
                        const NavPose* pose_now) {
   const NavParams* p = &core->params;
@@ -89,7 +99,10 @@ int32_t navCoreOnFrame(NavCore* core, int32_t t_ms, const NavDetection* detectio
   core->num_last_frame_points = count;
   const int32_t kept = navMergeDuplicates(core, detections, count, p->duplicate_radius_m);
   core->counters.duplicates += (uint32_t)(count - kept);
-  navTreesAssociate(&core->memory, (const double (*)[2])core->merged_points, kept, p->merge_radius_m,
+  for (int32_t k = 0; k < kept; k++) {
+    core->association_radii[k] = associationRadius(core, core->merged_points[k][0], core->merged_points[k][1]);
+  }
+  navTreesAssociate(&core->memory, (const double (*)[2])core->merged_points, core->association_radii, kept,
                     core->assignment);
   int32_t num_protected = 0;
   for (int32_t k = 0; k < kept; k++) {

@@ -55,8 +55,8 @@ static void candidatePosition(const NavTreeMemory* memory, int32_t k, double* x,
   navTreesEntry(memory, visited, visited ? k - memory->num_trees : k, x, y);
 }
 
-void navTreesAssociate(const NavTreeMemory* memory, const double (*points)[2], int32_t count,
-                       double merge_radius, NavAssociation* result) {
+void navTreesAssociate(const NavTreeMemory* memory, const double (*points)[2], const double* radii,
+                       int32_t count, NavAssociation* result) {
   bool taken[NAV_MAX_TREES + NAV_MAX_VISITED];
   const int32_t candidates = memory->num_trees + memory->num_visited;
   memset(taken, 0, sizeof(taken));
@@ -79,7 +79,7 @@ void navTreesAssociate(const NavTreeMemory* memory, const double (*points)[2], i
         candidatePosition(memory, k, &cx, &cy);
         const double d = hypot(points[i][0] - cx, points[i][1] - cy);
         /* (d, i) order, ties kept in candidate order: strictly smaller wins */
-        if (d <= merge_radius && (best_i < 0 || d < best_d || (d == best_d && i < best_i))) {
+        if (d <= radii[i] && (best_i < 0 || d < best_d || (d == best_d && i < best_i))) {
           best_i = i;
           best_k = k;
           best_d = d;

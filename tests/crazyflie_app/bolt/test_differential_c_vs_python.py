@@ -240,6 +240,22 @@ def test_that_the_c_core_drops_a_reached_tree_seen_again_as_the_python_core_does
     assert "tree_absorbed" in twins.event_kinds
 
 
+def test_that_the_c_core_keeps_a_tree_outside_the_column_off_a_stored_neighbour_as_the_python_core_does():
+    # moderate sweep flight 59's plantation: on the turn segment from (0.3, 0) to (0.3, -0.94) tree 3 is
+    # 0.40 m off it and tree 4, 0.365 m beyond, outside; every dropped detection of tree 3 leaves tree 4's
+    pmap = map_from_dict({"name": "turn", "altitude_m": 1.42,
+                          "waypoints": [[0.3, 0.9367], [1.7138, 0.9367], [1.7138, 0.0], [0.3, 0.0],
+                                        [0.3, -0.9367], [1.7138, -0.9367]],
+                          "trees": [{"id": 1, "x": 0.7, "y": 0.035, "species": "oil_palm", "crown_m": 0.339},
+                                    {"id": 2, "x": 1.166, "y": -0.049, "species": "oil_palm", "crown_m": 0.33},
+                                    {"id": 3, "x": 0.7, "y": -0.89, "species": "oil_palm", "crown_m": 0.384},
+                                    {"id": 4, "x": 1.065, "y": -0.89, "species": "oil_palm", "crown_m": 0.308}]},
+                         source="<flight 59>")
+    steps, phases, twins = fly_twins(pmap, seed=59)
+    assert "DONE" in phases
+    assert twins.py.counters.reached == 4
+
+
 def test_that_a_divergence_names_the_first_differing_step():
     # Fixture: the C core flies a different altitude, so the first take-off setpoint already differs
     pmap = load_map("map1")
