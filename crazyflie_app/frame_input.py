@@ -35,8 +35,8 @@ class FrameInput:
         p = self.params
         merged, owner = merge_duplicates(detections, points, p.duplicate_radius_m)
         self.counters.duplicates += len(detections) - len(merged)
-        points = [point for _, point in merged]
-        assignment = self.memory.associate(points, [self.association_radius(x, y) for x, y in points])
+        merged_points = [point for _, point in merged]
+        assignment = self.memory.associate(merged_points, [self.association_radius(x, y) for x, y in merged_points])
         protected = {tree_id for kind, tree_id in assignment if kind == "tree"}
         merged_ids = []
         for (det, (wx, wy)), (kind, tree_id) in zip(merged, assignment):
