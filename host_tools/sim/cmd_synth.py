@@ -16,7 +16,7 @@ repeated (--species oil_palm --species olive = --species oil_palm olive), make a
 library, docs/simulator.md), scaled to the flight camera: crops and frames of real crowns at flight scale.
 --touching RATE: in the scenes' rows each tree touches the previous one with probability RATE (crowns meeting
 on one line, centre distance = sum of the radii + 0-2 cm, as foranav plantation's clusters); default: the
-original scenes (same bytes). 0.15 gives the plantations' share of touching palms (docs/detector.md).
+original scenes (same bytes). 0.15 is the mean of foranav plantation's cluster_rate (docs/simulator.md).
 """
 import argparse
 import csv
