@@ -14,6 +14,9 @@ Same seed, same bytes. --species selects the target species (default oil_palm); 
 repeated (--species oil_palm --species olive = --species oil_palm olive), make all of them targets.
 --crowns CSV ... draws the trees of the species in those annotation CSVs from their photographs (the crown
 library, docs/simulator.md), scaled to the flight camera: crops and frames of real crowns at flight scale.
+--touching RATE: in the scenes' rows each tree touches the previous one with probability RATE (crowns meeting
+on one line, centre distance = sum of the radii + 0-2 cm, as foranav plantation's clusters); default: the
+original scenes (same bytes). 0.15 is the mean of foranav plantation's cluster_rate (docs/simulator.md).
 """
 import argparse
 import csv
@@ -45,6 +48,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seed", type=argtypes.seed, default=0, help="seed (default 0)")
     parser.add_argument("--species", nargs="+", action="extend", choices=SPECIES, default=None,
                         help="target species, repeatable (default oil_palm)")
+    parser.add_argument("--touching", type=argtypes.probability, default=None, metavar="RATE",
+                        help="probability that a tree touches the previous one of its row (default: the "
+                             "original scenes)")
     add_appearance_arguments(parser)
 
 
@@ -53,7 +59,8 @@ def run(args: argparse.Namespace) -> int:
     frame_count = args.count if args.frames is None else args.frames
     species = tuple(dict.fromkeys(args.species or DEFAULT_SPECIES))
     _, appearance = appearance_from_args(args, SPECIES, "the synth scenes")
-    positives, negatives, frames = generate(args.seed, args.count, frame_count, species, appearance=appearance)
+    positives, negatives, frames = generate(args.seed, args.count, frame_count, species, appearance=appearance,
+                                           touching_rate=args.touching)
     try:
         write_into(Path(args.out), positives, negatives, frames)
     except OSError as err:

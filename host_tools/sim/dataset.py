@@ -2,6 +2,10 @@
 
 Scenes are small random plots (a few rows of mixed species, sometimes overlapping crowns, roofs and road
 crossings) seen by the 352x288 camera from 1.0-1.5 m at random positions and yaw, with random camera effects.
+With ``touching_rate`` (``foranav synth --touching``) a tree of a row is, with that probability, moved up
+against the previous one so that the two crowns touch on one line, as ``foranav plantation`` places its
+clusters (centre distance = sum of the radii + 0..TOUCH_TOLERANCE_M); without it the scenes are the original
+ones (same random draws, same bytes).
 
 Crop protocol (paper, Section IV-A): a positive crop is a square window around one complete tree of a target
 species (window = 1.15-1.45 x the crown box, centre jittered); a negative crop is a window with no complete
@@ -16,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from host_tools.maps import SPECIES, PlantationMap, Tree, WorldObject
+from host_tools.plantation import TOUCH_TOLERANCE_M
 from host_tools.sim.camera import CameraModel, Pose
 from host_tools.sim.crowns import Appearance
 from host_tools.sim.world import Frame, ObjectInView, TreeInView, World, random_effects
@@ -43,8 +48,13 @@ class AnnotatedFrame:
     boxes: tuple  # ((x_center, y_center, width, height, label), ...) complete trees and objects only
 
 
-def random_scene(rng: np.random.Generator, target_species: str, name: str = "synth") -> PlantationMap:
-    """A small random plot: rows of trees (targets and look-alikes), sometimes clusters, roofs and crossings."""
+def random_scene(rng: np.random.Generator, target_species: str, name: str = "synth",
+                 touching_rate: float | None = None) -> PlantationMap:
+    """A small random plot: rows of trees (targets and look-alikes), sometimes clusters, roofs and crossings.
+
+    touching_rate: probability that a tree touches the previous tree of its row (see the module docstring);
+    None draws nothing for it, so the scenes stay those of the original generator.
+    """
     altitude = float(rng.uniform(1.0, 1.5))
     lookalikes = [s for s in SPECIES if s not in target_species]
     trees = []
@@ -52,15 +62,20 @@ def random_scene(rng: np.random.Generator, target_species: str, name: str = "syn
     for r in range(rows):
         y = -PLOT_M[1] / 2 + (r + 0.5) * PLOT_M[1] / rows + rng.normal(0, 0.05)
         x = -PLOT_M[0] / 2 + rng.uniform(0.1, 0.3)
+        previous = None  # the previous tree of this row, None after a gap
         while x < PLOT_M[0] / 2:
             crown = float(rng.uniform(0.3, 0.45))
             if rng.random() < 0.5:
                 species = target_species[int(rng.integers(len(target_species)))]
             else:
                 species = lookalikes[int(rng.integers(len(lookalikes)))]
-            if rng.random() > 0.12:  # some gaps in the rows
-                trees.append(Tree(len(trees) + 1, float(x), float(y + rng.normal(0, 0.06)), species, crown,
-                                  species in target_species))
+            if touching_rate is not None and previous is not None and rng.random() < touching_rate:
+                x = previous.x + (previous.crown_m + crown) / 2.0 + float(rng.uniform(0.0, TOUCH_TOLERANCE_M))
+                previous = _add_tree(trees, x, previous.y, species, crown, target_species)
+            elif rng.random() > 0.12:  # some gaps in the rows
+                previous = _add_tree(trees, x, y + rng.normal(0, 0.06), species, crown, target_species)
+            else:
+                previous = None
             # usually a crown apart, sometimes closer: overlapping canopies
             x += crown * (rng.uniform(0.75, 0.95) if rng.random() < 0.2 else rng.uniform(1.1, 1.6))
     objects = []
@@ -74,6 +89,12 @@ def random_scene(rng: np.random.Generator, target_species: str, name: str = "syn
     waypoints = ((-PLOT_M[0] / 2, 0.0), (PLOT_M[0] / 2, 0.0))
     return PlantationMap(name, altitude, waypoints, tuple(trees), tuple(objects), int(rng.integers(2 ** 31)),
                          target_species[0])
+
+
+def _add_tree(trees: list, x: float, y: float, species: str, crown: float, target_species: Sequence[str]) -> Tree:
+    tree = Tree(len(trees) + 1, float(x), float(y), species, crown, species in target_species)
+    trees.append(tree)
+    return tree
 
 
 def scene_frames(rng: np.random.Generator, scene: PlantationMap, camera: CameraModel, count: int,
@@ -165,10 +186,11 @@ def negative_group(category: str) -> str:
 
 
 def generate(seed: int, count: int, frame_count: int, target_species: Sequence[str] = ("oil_palm",),
-             camera: CameraModel | None = None, appearance: Appearance | None = None) -> tuple[list, list, list]:
+             camera: CameraModel | None = None, appearance: Appearance | None = None,
+             touching_rate: float | None = None) -> tuple[list, list, list]:
     """(positives, negatives, frames): count crops of each class and frame_count annotated frames.
 
-    Deterministic for a seed. ``appearance`` (crowns.Appearance): photo crowns / ground photo for the scenes. Negatives follow NEGATIVE_QUOTAS, topped up from any category when one runs short.
+    Deterministic for a seed. ``touching_rate``: see ``random_scene`` (None: the original scenes). ``appearance`` (crowns.Appearance): photo crowns / ground photo for the scenes. Negatives follow NEGATIVE_QUOTAS, topped up from any category when one runs short.
     """
     camera = camera or CameraModel()
     rng = np.random.default_rng([seed & 0xFFFFFFFF, 2024])
@@ -180,7 +202,7 @@ def generate(seed: int, count: int, frame_count: int, target_species: Sequence[s
         if len(positives) >= count and len(frames) >= frame_count and \
                 all(len(pools[k]) >= quotas[k] for k in quotas):
             break
-        scene = random_scene(rng, tuple(target_species))
+        scene = random_scene(rng, tuple(target_species), touching_rate=touching_rate)
         for image, trees, objects in scene_frames(rng, scene, camera, FRAMES_PER_SCENE, appearance):
             if len(frames) < frame_count:
                 frames.append(AnnotatedFrame(image, frame_boxes(trees, objects)))

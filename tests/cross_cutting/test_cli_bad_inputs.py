@@ -163,6 +163,7 @@ CASES = [
     (["synth", "--out", "data", "--count", "5", "--frames", "-1"], "--frames"),
     (["synth", "--out", "data", "--count", "5", "--seed", "-1"], "--seed"),
     (["synth", "--out", "data", "--count", "5", "--species", "oil_palm", "--species", "pine"], "--species"),
+    (["synth", "--out", "data", "--count", "5", "--touching", "1.5"], "--touching"),
     (["synth", "--out", "afile", "--count", "5"], "--out"),
     (["synth", "--out", "ro", "--count", "5"], "--out"),
     # fly

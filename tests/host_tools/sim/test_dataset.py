@@ -1,5 +1,6 @@
 """Rendered datasets: the crop protocol holds, annotations load with the one loader, same seed same bytes."""
 import csv
+import math
 import subprocess
 import sys
 
@@ -7,10 +8,14 @@ import numpy as np
 import pytest
 
 from host_tools.annotations import read_boxes, boxes_by_image
-from host_tools.sim.dataset import crop_candidates, generate, _contains
+from host_tools.plantation import TOUCH_TOLERANCE_M
+from host_tools.sim.dataset import crop_candidates, generate, random_scene, _contains
 from host_tools.sim.world import TreeInView
 
 COUNT = 6
+MM = 1e-3  # tree positions are compared to the millimetre
+ORIGINAL_SEED_12_TREES = 11
+ORIGINAL_SEED_12_CHECKSUM = 9.617629
 
 
 def synth(out, seed, *extra):
@@ -90,3 +95,32 @@ def test_that_a_bad_count_is_one_line_and_nonzero(tmp_path):
                            "--count", "0"], capture_output=True, text=True)
     assert proc.returncode == 2 and proc.stderr.strip().count("\n") == 0 and "--count" in proc.stderr
     assert not (tmp_path / "x").exists()
+
+
+def touching_partner(tree, trees):
+    """The tree of the same row whose crown meets this one's (centre distance = sum of radii + tolerance)."""
+    for other in trees:
+        gap = math.hypot(tree.x - other.x, tree.y - other.y) - (tree.crown_m + other.crown_m) / 2.0
+        if other is not tree and abs(other.y - tree.y) < MM and -MM <= gap <= TOUCH_TOLERANCE_M + MM:
+            return other
+    return None
+
+
+def touching_share(touching_rate):
+    trees = [scene.trees for seed in range(8)
+             for scene in [random_scene(np.random.default_rng(seed), ("oil_palm",), touching_rate=touching_rate)]]
+    return np.mean([touching_partner(t, row) is not None for row in trees for t in row])
+
+
+def test_that_the_touching_option_puts_crowns_against_their_row_neighbour():
+    # with rate 1 every tree after the first of its row touches the previous one (objects may remove a few)
+    assert touching_share(1.0) > 0.8
+    assert touching_share(None) < 0.2
+
+
+def test_that_without_the_touching_option_the_scenes_are_the_original_ones():
+    # Fixture: the first scene of `foranav synth --seed 12` as the generator drew it before the option existed
+    scene = random_scene(np.random.default_rng([12, 2024]), ("oil_palm",))
+    # Assert
+    assert len(scene.trees) == ORIGINAL_SEED_12_TREES
+    assert round(sum(t.x + 2 * t.y + 3 * t.crown_m for t in scene.trees), 6) == ORIGINAL_SEED_12_CHECKSUM
