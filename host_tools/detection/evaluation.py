@@ -309,10 +309,8 @@ def evaluate_frames(model: TreeModel, frames: Sequence[dataset.Frame], settings:
             counts["texture"] = len(hits)
             for name_ in FUNNEL_STAGES:
                 stages[name_] += counts[name_]
-    result = _figures(n_hits, n_fp, n_miss, errors, len(frames))
-    result.update(n_lookalike_false_alarms=n_lookalike, false_alarms_per_image=n_fp / float(max(1, len(frames))),
-                  lookalike_false_alarms_per_image=n_lookalike / float(max(1, len(frames))),
-                  scored=scored, domains=domains_used)
+    result = _figures(n_hits, n_fp, n_miss, errors, len(frames), n_lookalike)
+    result.update(scored=scored, domains=domains_used)
     if funnel:
         result["funnel"] = stages
     return result
@@ -329,14 +327,16 @@ def _with_windows(settings, windows):
     return copy
 
 
-def _figures(n_hits, n_fp, n_miss, errors, n_frames):
+def _figures(n_hits, n_fp, n_miss, errors, n_frames, n_lookalike):
     precision = n_hits / (n_hits + n_fp) if n_hits + n_fp else 0.0
     recall = n_hits / (n_hits + n_miss) if n_hits + n_miss else 0.0
     return {
         "precision": precision, "recall": recall,
         "f1": 2 * precision * recall / (precision + recall) if precision + recall else 0.0,
         "n_frames": n_frames, "n_trees": n_hits + n_miss, "n_detections": n_hits + n_fp,
-        "n_hits": n_hits, "n_false_alarms": n_fp,
+        "n_hits": n_hits, "n_false_alarms": n_fp, "n_lookalike_false_alarms": n_lookalike,
+        "false_alarms_per_image": n_fp / float(max(1, n_frames)),
+        "lookalike_false_alarms_per_image": n_lookalike / float(max(1, n_frames)),
         "centre_error_px_mean": float(np.mean(errors)) if errors else None,
         "centre_error_px_median": float(np.median(errors)) if errors else None,
         "centre_error_px_p90": float(np.percentile(errors, 90)) if errors else None,
@@ -350,7 +350,8 @@ def combine(results: Sequence[dict]) -> dict:
     false_alarms = sum(r["n_false_alarms"] for r in results)
     misses = sum(r["n_trees"] - r["n_hits"] for r in results)
     errors = [e for r in results for e in r["centre_errors"]]
-    return _figures(hits, false_alarms, misses, errors, sum(r["n_frames"] for r in results))
+    lookalikes = sum(r["n_lookalike_false_alarms"] for r in results)
+    return _figures(hits, false_alarms, misses, errors, sum(r["n_frames"] for r in results), lookalikes)
 
 
 def precision_recall_curve(scored: Sequence[tuple], n_trees: int) -> list[tuple[float, float, float]]:

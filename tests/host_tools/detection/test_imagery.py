@@ -95,6 +95,10 @@ def test_that_evaluate_with_repeated_data_scores_every_csv(tmp_path, capsys):
     assert sorted(result["imageries"]) == sorted([csv_a, csv_b])
     assert result["frames"]["n_frames"] == 5
     assert set(result["imageries"][csv_a]["funnel"]) == set(evaluation.FUNNEL_STAGES)
+    # the pooled figures carry the per-image false alarms too (the coconut target is judged on them)
+    for key in ("false_alarms", "lookalike_false_alarms"):
+        pooled = sum(r["n_" + key] for r in result["imageries"].values())
+        assert result["frames"][key + "_per_image"] == pytest.approx(pooled / 5.0)
 
 
 def test_that_the_report_warns_when_colour_alone_rejects_look_alikes_or_rejects_the_positives():
