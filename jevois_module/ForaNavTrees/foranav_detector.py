@@ -302,13 +302,10 @@ class TreeDetector(object):
             group = _anchored(group)
             if _inside_a_crown(group[0], detections, margin):
                 continue
-            x0, y0, side = _pixel_window(group[0], value.shape)
-            if trace is not None:
-                trace["nms"].append(group[0])
-            if self.colour_score(hsv[y0:y0 + side, x0:x0 + side]) <= hs_threshold:
+            group = self._coloured_first(group, hsv, hs_threshold, trace)
+            if group is None:
                 continue
-            if trace is not None:
-                trace["colour"].append(group[0])
+            x0, y0, side = _pixel_window(group[0], value.shape)
             if self.model.second_window is not None and self.second_score(
                     value[y0:y0 + side, x0:x0 + side], (x0, y0, side)) <= self.threshold("second_threshold"):
                 continue
@@ -319,6 +316,26 @@ class TreeDetector(object):
                 if len(detections) == self.settings.max_detections:
                     break
         return detections
+
+    def _coloured_first(self, group, hsv, hs_threshold, trace):
+        """The group with its first window that passes the colour test first, or None: its representative,
+        else the smaller windows that representative holds, best first.
+
+        A large window on a crown touching its neighbour, or over the frame's edge, can outscore the
+        crown-sized windows inside it (the neighbour's edge fills their ring) and fail the colour test on
+        the background and neighbour it spans: from straight above a 75-99 px crown touching a larger one
+        at 1.3-1.5 m (sweep flights 43, 119, 294) the 144-168 px window failed colour (0.41-0.62) while the
+        96-120 px windows it held scored 0.95-0.99, and the crown went unseen for a minute."""
+        representative = group[0]
+        for window in [representative] + [c for c in group[1:] if _holds(representative, c)]:
+            x0, y0, side = _pixel_window(window, hsv.shape)
+            if trace is not None:
+                trace["nms"].append(window)
+            if self.colour_score(hsv[y0:y0 + side, x0:x0 + side]) > hs_threshold:
+                if trace is not None:
+                    trace["colour"].append(window)
+                return [window] + [c for c in group if c is not window]
+        return None
 
     def second_score(self, value_window, key=None):
         """The second stage's score of a full-resolution value window (models with a second stage); key: the
@@ -492,6 +509,11 @@ def _contains(outer, inner):
     """True when square window ``inner`` lies wholly inside ``outer`` (both (score, cx, cy, side))."""
     reach = (outer[3] - inner[3]) / 2.0
     return abs(outer[1] - inner[1]) <= reach and abs(outer[2] - inner[2]) <= reach
+
+
+def _holds(outer, inner):
+    """True when ``inner`` is a smaller window lying wholly inside ``outer``."""
+    return inner[3] < outer[3] and _contains(outer, inner)
 
 
 def _anchored(group):
