@@ -299,10 +299,7 @@ class TreeDetector(object):
         hs_threshold, variance_threshold = self.threshold("hs_threshold"), self.threshold("variance_threshold")
         margin = self.model.window_margin
         for group in _group(candidates, self.settings.nms_overlap):
-            group = _anchored(group)
-            if _inside_a_crown(group[0], detections, margin):
-                continue
-            group = self._coloured_first(group, hsv, hs_threshold, trace)
+            group = self._representative_first(_anchored(group), detections, hsv, hs_threshold, trace)
             if group is None:
                 continue
             x0, y0, side = _pixel_window(group[0], value.shape)
@@ -317,17 +314,23 @@ class TreeDetector(object):
                     break
         return detections
 
-    def _coloured_first(self, group, hsv, hs_threshold, trace):
-        """The group with its first window that passes the colour test first, or None: its representative,
-        else the smaller windows that representative holds, best first.
+    def _representative_first(self, group, detections, hsv, hs_threshold, trace):
+        """The group with its representative first, or None: the first window, of the group's anchor and then
+        the smaller windows the anchor holds (best first), that is not part of an accepted crown and passes
+        the colour test.
 
-        A large window on a crown touching its neighbour, or over the frame's edge, can outscore the
-        crown-sized windows inside it (the neighbour's edge fills their ring) and fail the colour test on
-        the background and neighbour it spans: from straight above a 75-99 px crown touching a larger one
-        at 1.3-1.5 m (sweep flights 43, 119, 294) the 144-168 px window failed colour (0.41-0.62) while the
-        96-120 px windows it held scored 0.95-0.99, and the crown went unseen for a minute."""
-        representative = group[0]
-        for window in [representative] + [c for c in group[1:] if _holds(representative, c)]:
+        A large window on a crown touching its neighbour can outscore the crown-sized windows inside it (the
+        neighbour's edge fills their ring) while it spans the neighbour or the background beside the crown:
+        it then fails the colour test, or shares more than COVER_FRACTION with the neighbour's accepted
+        window, and used to take the crown-sized windows down with it. From straight above a 75-99 px crown
+        touching a larger one at 1.3-1.5 m (sweep flights 43, 119, 294) the 144-168 px window failed colour
+        (0.41-0.62) while the 96-120 px windows it held scored 0.95-0.99, and the crown went unseen for a
+        minute; in flight 6 a 168 px window reaching 32 px towards the next tree was dropped as that tree's."""
+        anchor = group[0]
+        margin = self.model.window_margin
+        for window in [anchor] + [c for c in group[1:] if _holds(anchor, c)]:
+            if _inside_a_crown(window, detections, margin):
+                continue
             x0, y0, side = _pixel_window(window, hsv.shape)
             if trace is not None:
                 trace["nms"].append(window)
