@@ -190,3 +190,30 @@ def test_that_the_crown_sized_window_holding_an_off_centre_best_window_anchors_t
     # a larger window scoring much worse does not take over
     weak = (-0.70 - 2 * detector_core.SCALE_TIE, 170.0, 151.0, 168.0)
     assert detector_core._anchored([off_centre, weak])[0] is off_centre
+
+
+def _representative(model, group, accepted, hs_threshold):
+    detector = detector_core.TreeDetector(model, detector_core.DetectorSettings(hs_threshold=hs_threshold))
+    hsv = np.full((288, 352, 3), 100, np.uint8)  # the colour test's outcome comes from hs_threshold alone
+    return detector._representative_first(group, accepted, hsv, hs_threshold, None)
+
+
+def test_that_an_anchor_dropped_as_a_neighbours_crown_leaves_the_crown_sized_window_it_holds(model):
+    # sweep flight 6 at 1.35 m: tree 4 accepted from a 110 px window; the 168 px anchor of tree 3's group
+    # reaches 32 px towards tree 4 and shares more than half of that window; the 96 px window it holds is on
+    # tree 3 (95 px crown)
+    accepted = [detector_core.Detection(157.0, 59.0, 85.0, 85.0, 0.3)]
+    anchor = (-0.90, 170.0, 142.0, 168.0)
+    crown_sized = (-1.09, 182.0, 174.0, 96.0)
+    larger = (-1.15, 177.0, 171.0, 120.0)
+    elsewhere = (-1.20, 120.0, 142.0, 96.0)  # in the group, not held by the anchor
+    chosen = _representative(model, [anchor, crown_sized, larger, elsewhere], accepted, -2.0)
+    assert chosen[0] is crown_sized
+    assert sorted(map(id, chosen)) == sorted(map(id, [anchor, crown_sized, larger, elsewhere]))
+    # the anchor is kept when it is not part of an accepted crown; nothing when no window passes colour
+    assert _representative(model, [anchor, crown_sized], [], -2.0)[0] is anchor
+    assert _representative(model, [anchor, crown_sized], [], 2.0) is None
+    # a held window inside the accepted crown too is not taken
+    held_duplicate = (-1.1, 160.0, 66.0, 96.0)
+    assert detector_core._inside_a_crown(held_duplicate, accepted, model.window_margin)
+    assert _representative(model, [(-0.9, 160.0, 70.0, 168.0), held_duplicate], accepted, -2.0) is None
