@@ -1,4 +1,4 @@
-"""Benchmarks that print figures: foranav bench {sim,detector,flight,sweep} [--json].
+"""Benchmarks that print figures: foranav bench {sim,detector,flight,sweep,recall} [--json].
 
 sim:      rendered 352x288 camera frames per second on one core (plantation simulator); with --crowns CSV ...
           also over photo crowns, next to the procedural figures.
@@ -6,6 +6,9 @@ flight:   simulated seconds per CPU second of an oracle flight (firmware emulati
 detector: ms per frame and FPS of the tree detector at 352x288, 640x480 and 1280x1024, peak memory, and the
           speed-up over the per-window reference implementation.
 sweep:    flights per CPU-second and the 1 -> 2 Dask worker speed-up (--camera sim|oracle, --count N).
+recall:   how often the camera module sees the crown under the MAV from straight above: isolated, touching
+          one or two neighbours, small beside a larger one, centred and off-centre (--model, --count frames
+          per case, --seed).
 """
 import argparse
 import importlib
@@ -18,6 +21,7 @@ TARGETS = {
     "detector": "host_tools.detection.bench",
     "flight": "host_tools.flight.bench",
     "sweep": "host_tools.sweep.bench",
+    "recall": "host_tools.detection.recall_bench",
 }
 
 
@@ -27,7 +31,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seed", type=argtypes.seed, default=0, help="seed of the rendered test frames")
     parser.add_argument("--camera", choices=("sim", "oracle"), default=None, help="sweep: camera (default sim)")
     parser.add_argument("--count", type=argtypes.int_range(1, 100000), default=None,
-                        help="sweep: flights per worker count (default 6)")
+                        help="sweep: flights per worker count (default 6); recall: frames per case (default 150)")
+    parser.add_argument("--model", default=None,
+                        help="recall: model file, or a shipped species (default: the shipped oil palm model)")
     add_appearance_arguments(parser)  # bench sim: --crowns / --ground
 
 

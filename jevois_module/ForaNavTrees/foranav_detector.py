@@ -489,7 +489,8 @@ def _inside_a_crown(candidate, detections, margin):
     1.3 crowns) share at most 0.4 of the smaller one, even one size step apart, so real neighbours are kept.
     Not when the accepted window is about 2 crowns (the largest size on a small crown, or an anchor): a
     96 px window on a touching neighbour one crown away then shares 0.54 and is dropped (arithmetic, not seen
-    to cause a sweep failure).
+    to cause a sweep failure). A dropped anchor does not take its group with it: the smaller windows it holds
+    are tried next (TreeDetector._representative_first).
     """
     for d in detections:
         if abs(candidate[1] - d.x) < 0.5 * d.w and abs(candidate[2] - d.y) < 0.5 * d.h:

@@ -204,6 +204,8 @@ CASES = [
     # bench, serial-check
     (["bench", "sim", "--seed", "-1"], "--seed"),
     (["bench", "gpu"], "target"),
+    (["bench", "recall", "--model", "no_such_model.npz", "--count", "1"], "no_such_model.npz"),
+    (["bench", "recall", "--count", "0"], "--count"),
     (["serial-check", "/dev/null", "--seconds", "-1"], "--seconds"),
     (["serial-check", "/dev/null", "--seconds", "inf"], "--seconds"),
     (["serial-check", "/dev/null", "--seconds", "nan"], "--seconds"),
