@@ -251,9 +251,9 @@ def frame_window_sizes(model: TreeModel, frame: dataset.Frame, crown_px: float |
 
 def _funnel(trace, truths, settings_threshold):
     """How many of the truths survive each stage: a window centred in the box scoring above the SVM
-    threshold; a score-map peak; a peak within the candidate cap; a group's window put to the colour test
-    (its representative after NMS, or a smaller window it holds when the representative failed); the colour
-    test; the second stage (models with one); the texture test (a detection)."""
+    threshold; a score-map peak; a peak within the candidate cap; a group's best window after NMS; the
+    colour test (passed by the group's window, or by a smaller one it holds when it failed: a crown can pass
+    colour without passing nms); the second stage (models with one); the texture test (a detection)."""
     def centred(items, box):
         return any(abs(c[1] - box.x_center) <= box.width / 2.0 and abs(c[2] - box.y_center) <= box.height / 2.0
                    for c in items)

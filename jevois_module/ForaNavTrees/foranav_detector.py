@@ -332,7 +332,7 @@ class TreeDetector(object):
             if _inside_a_crown(window, detections, margin):
                 continue
             x0, y0, side = _pixel_window(window, hsv.shape)
-            if trace is not None:
+            if trace is not None and window is anchor:  # "nms": groups' best windows (funnel, hard negatives)
                 trace["nms"].append(window)
             if self.colour_score(hsv[y0:y0 + side, x0:x0 + side]) > hs_threshold:
                 if trace is not None:
