@@ -71,7 +71,7 @@ def second_score(model: TreeModel, value_window: np.ndarray) -> float | None:
     """The second stage's score of a full-resolution value window (None: the model has none)."""
     if model.second_window is None:
         return None
-    return model.second_score(features.second_stage_hog(value_window, model.second_window))
+    return model.second_score(value_window)
 
 
 def frame_second_score(model: TreeModel, frame: dataset.Frame, cx: float, cy: float, side: float) -> float | None:

@@ -242,19 +242,19 @@ SECOND_STAGE_SCORE = -1.0  # first-stage group bests above this are the second s
 SECOND_STAGE_SPREAD = (0.85, 1.0, 1.18)  # false alarms at typical crown x margin x these (detection's sizes)
 
 
-def second_descriptor(frame: Frame, cx: float, cy: float, side: float, window: int,
+def second_descriptor(frame: Frame, cx: float, cy: float, side: float, window: int, kind: str = "hog",
                       transform: int = 0) -> np.ndarray:
-    """foranav_features.second_stage_hog of a frame window; transform 0..7 as dataset.top_descriptor."""
+    """foranav_features.second_stage_descriptor of a frame window; transform 0..7 as dataset.top_descriptor."""
     rows, cols = dataset.pixel_window(frame, cx, cy, side)
     crop = frame.value[rows, cols]
     if transform % 4:
         crop = np.rot90(crop, transform % 4)
     if transform >= 4:
         crop = crop[:, ::-1]
-    return features.second_stage_hog(np.ascontiguousarray(crop), window)
+    return features.second_stage_descriptor(np.ascontiguousarray(crop), window, kind)
 
 
-def second_stage_examples(frames: Sequence[Frame], species: str, model: TreeModel, window: int,
+def second_stage_examples(frames: Sequence[Frame], species: str, model: TreeModel, window: int, kind: str,
                           rng: np.random.RandomState, survey: bool) -> tuple[np.ndarray, np.ndarray]:
     """(descriptors, labels) of the second stage from one imagery's learning frames: the positives as the
     first stage's (augmented crowns), the first stage's negative windows and, on survey frames, the first
@@ -264,16 +264,16 @@ def second_stage_examples(frames: Sequence[Frame], species: str, model: TreeMode
     margin = model.window_margin
     for frame in frames:
         for _frame, cx, cy, side, transform in positive_windows([frame], species, margin, rng):
-            x.append(second_descriptor(frame, cx, cy, side, window, transform))
+            x.append(second_descriptor(frame, cx, cy, side, window, kind, transform))
             y.append(1)
         for cx, cy, side in negative_windows(frame, species, margin, rng, survey):
-            x.append(second_descriptor(frame, cx, cy, side, window, rng.randint(8)))
+            x.append(second_descriptor(frame, cx, cy, side, window, kind, rng.randint(8)))
             y.append(-1)
         if survey:
             for _score, cx, cy, side in first_stage_false_alarms(frame, species, model):
-                x.append(second_descriptor(frame, cx, cy, side, window, rng.randint(8)))
+                x.append(second_descriptor(frame, cx, cy, side, window, kind, rng.randint(8)))
                 y.append(-1)
-    return np.array(x, np.float32).reshape(-1, features.hog_descriptor_length(window)), np.array(y)
+    return np.array(x, np.float32).reshape(-1, features.second_stage_length(window, kind)), np.array(y)
 
 
 def first_stage_false_alarms(frame: Frame, species: str, model: TreeModel) -> list[tuple]:

@@ -47,6 +47,7 @@ DEFAULT_WINDOW_SIZES = (96, 120, 144, 168)  # at 352 px frame width, margin 1.3:
 DEFAULT_REFERENCE_WIDTH = 352
 SECOND_STAGE_WINDOW = features.SECOND_STAGE_WINDOWS[0]
 SECOND_STAGE_C = 1.0
+DEFAULT_SECOND_KIND = "hog+radial"  # docs/detector.md: the radial cue lifts the crop protocol and frame F1
 DEFAULT_MARGIN = 1.3  # window side / crown diameter: the crown plus a ring of ground (its outline)
 HARD_NEGATIVE_ROUNDS = 3
 SVM_C = 1.0
@@ -84,7 +85,8 @@ def calibration_count(n_frames: int) -> int:
 def train(data: Sequence[Imagery] | Sequence[dataset.Frame], species: str, seed: int = 0,
           window_sizes: Sequence[int] = DEFAULT_WINDOW_SIZES, reference_width: int = DEFAULT_REFERENCE_WIDTH,
           margin: float = DEFAULT_MARGIN, log: Callable[[str], None] | None = None, crops: Sequence = (),
-          colour_kind: str = "templates", colour_templates: int = 1, provenance: str = "") -> TreeModel:
+          colour_kind: str = "templates", colour_templates: int = 1, provenance: str = "",
+          second_kind: str = DEFAULT_SECOND_KIND) -> TreeModel:
     """Train a TreeModel for `species` from annotated imageries (or frames). Same inputs and seed -> same model.
 
     Each imagery's frames are split (seeded): the SVM learns from CALIBRATION_SPLIT's complement, and the
@@ -144,7 +146,7 @@ def train(data: Sequence[Imagery] | Sequence[dataset.Frame], species: str, seed:
             break
         negatives = np.vstack([negatives, hard])
     if any(not camera[im.name] for im in targets):  # survey imagery: camera (rendered) models stay one stage
-        _train_second_stage(model, imageries, learning, camera, species, seed, log)
+        _train_second_stage(model, imageries, learning, camera, species, seed, log, second_kind)
     for index, imagery in enumerate(targets):
         _calibrate(model, index, calibration[imagery.name] or learning[imagery.name], rng, log)
     camera_targets = [im for im in targets if camera[im.name]]
@@ -166,15 +168,16 @@ def train(data: Sequence[Imagery] | Sequence[dataset.Frame], species: str, seed:
     return model
 
 
-def _train_second_stage(model, imageries, learning, camera, species, seed, log):
+def _train_second_stage(model, imageries, learning, camera, species, seed, log, kind):
     """The second stage: a linear SVM on SECOND_STAGE_WINDOW px HOG of the learning frames' windows, with
     the first stage's false alarms on survey frames as negatives (own random stream: the first stage's
     examples do not change)."""
     rng = np.random.RandomState(seed + 1)
-    parts = [_second_stage_examples(learning[im.name], species, model, SECOND_STAGE_WINDOW, rng, not camera[im.name])
-             for im in imageries]
+    parts = [_second_stage_examples(learning[im.name], species, model, SECOND_STAGE_WINDOW, kind, rng,
+                                    not camera[im.name]) for im in imageries]
     x = np.vstack([part[0] for part in parts])
     y = np.concatenate([part[1] for part in parts])
-    model.second_window = SECOND_STAGE_WINDOW
+    model.second_window, model.second_kind = SECOND_STAGE_WINDOW, kind
     model.second_weights, model.second_bias = train_linear_svm(x, y, c=SECOND_STAGE_C, seed=seed)
-    log("second stage: %d px HOG, %d positives, %d negatives" % (SECOND_STAGE_WINDOW, (y > 0).sum(), (y < 0).sum()))
+    log("second stage: %d px %s, %d positives, %d negatives" % (SECOND_STAGE_WINDOW, kind, (y > 0).sum(),
+                                                                (y < 0).sum()))

@@ -346,7 +346,7 @@ class TreeDetector(object):
         runs the later steps many times on one frame's maps)."""
         if key is not None and key in self._second_scores:
             return self._second_scores[key]
-        score = self.model.second_score(features.second_stage_hog(value_window, self.model.second_window))
+        score = self.model.second_score(value_window)
         if key is not None:
             self._second_scores[key] = score
         return score

@@ -38,9 +38,11 @@
 # Optional (all four or none; models trained on survey imagery): the second stage, a linear SVM on a finer
 # HOG (foranav_features.second_stage_hog) that each group's best window must also pass.
 #   second_window    int      side of its downscaled window (48)
-#   second_weights   f32[n]   its weights (n = hog_descriptor_length(second_window))
+#   second_weights   f32[n]   its weights (n = second_stage_length(second_window, second_kind))
 #   second_bias      f32
 #   second_threshold f32[D]   per domain, the score a detection's window must exceed
+#   second_kind      str      optional: "hog+radial" adds foranav_features.radial_descriptor to the HOG
+#                             (absent: "hog", the files written before it keep their bytes)
 import zipfile
 
 import numpy as np
@@ -121,7 +123,7 @@ class TreeModel(object):
                  hs_threshold=-1.0, template_hue=None, template_sat=None, window_sizes=(96,), window_margin=1.3,
                  reference_width=352, seed=0, notes="", edge_threshold=DEFAULT_EDGE_THRESHOLD, domains=None,
                  colour_kind="templates", crown_ratios=None, provenance="", domain_name="default",
-                 second_window=None, second_weights=None, second_bias=0.0):
+                 second_window=None, second_weights=None, second_bias=0.0, second_kind="hog"):
         self.species = str(species)
         self.svm_weights = np.asarray(svm_weights, np.float32).ravel()
         self.svm_bias = float(svm_bias)
@@ -148,6 +150,7 @@ class TreeModel(object):
         self.second_window = None if second_window is None else int(second_window)
         self.second_weights = None if second_weights is None else np.asarray(second_weights, np.float32).ravel()
         self.second_bias = float(second_bias)
+        self.second_kind = str(second_kind)
         self.validate()
 
     # The first domain's values (single-imagery models, the camera's settings, older callers).
@@ -195,10 +198,13 @@ class TreeModel(object):
         if self.second_window is not None:
             if self.second_window % features.HOG_CELL or self.second_window < features.HOG_BLOCK * features.HOG_CELL:
                 raise ModelFormatError("second_window must be a multiple of %d px" % features.HOG_CELL)
-            length = features.hog_descriptor_length(self.second_window)
+            if self.second_kind not in features.SECOND_STAGE_KINDS:
+                raise ModelFormatError("second_kind %r is not one of %s" % (self.second_kind,
+                                                                          ", ".join(features.SECOND_STAGE_KINDS)))
+            length = features.second_stage_length(self.second_window, self.second_kind)
             if self.second_weights.shape != (length,):
-                raise ModelFormatError("second_weights has %d values, its HOG has %d" % (self.second_weights.size,
-                                                                                        length))
+                raise ModelFormatError("second_weights has %d values, its descriptor has %d"
+                                       % (self.second_weights.size, length))
             if not np.all(np.isfinite(self.second_weights)) or not np.isfinite(self.second_bias):
                 raise ModelFormatError("second-stage numbers must be finite")
         values = [self.svm_bias, self.edge_threshold, self.window_margin] + list(self.svm_weights)
@@ -212,8 +218,9 @@ class TreeModel(object):
         """SVM decision value of one top-layer descriptor (positive = tree-like)."""
         return float(np.dot(self.svm_weights, descriptor)) + self.svm_bias
 
-    def second_score(self, descriptor):
-        """The second stage's decision value of one descriptor (foranav_features.second_stage_hog)."""
+    def second_score(self, value_window):
+        """The second stage's decision value of one full-resolution value window."""
+        descriptor = features.second_stage_descriptor(value_window, self.second_window, self.second_kind)
         return float(np.dot(self.second_weights, descriptor)) + self.second_bias
 
     def to_arrays(self):
@@ -222,6 +229,8 @@ class TreeModel(object):
             arrays.update(second_window=np.array(self.second_window, np.int32), second_weights=self.second_weights,
                           second_bias=np.array(self.second_bias, np.float32),
                           second_threshold=np.array([d.second_threshold for d in self.domains], np.float32))
+            if self.second_kind != "hog":
+                arrays.update(second_kind=np.array(self.second_kind))
         return arrays
 
     def _core_arrays(self):
@@ -367,7 +376,8 @@ def model_from_arrays(arrays, name="model"):
             domains=domains, window_sizes=arrays["window_sizes"], window_margin=float(arrays["window_margin"]),
             reference_width=int(arrays["reference_width"]), crown_ratios=arrays["crown_ratios"],
             seed=int(arrays["seed"]), notes=str(arrays["notes"]), provenance=str(arrays["provenance"]),
-            second_window=second["window"], second_weights=second["weights"], second_bias=second["bias"])
+            second_window=second["window"], second_weights=second["weights"], second_bias=second["bias"],
+            second_kind=second["kind"])
     except ModelFormatError as err:
         raise ModelFormatError("%s: %s" % (name, err))
     except (TypeError, ValueError, IndexError) as err:
@@ -378,7 +388,7 @@ def _second_stage(arrays, count):
     """The optional second stage's fields: all four keys or none (window None: no second stage)."""
     present = [key for key in SECOND_STAGE_KEYS if key in arrays]
     if not present:
-        return {"window": None, "weights": None, "bias": 0.0, "threshold": [0.0] * count}
+        return {"window": None, "weights": None, "bias": 0.0, "threshold": [0.0] * count, "kind": "hog"}
     if len(present) != len(SECOND_STAGE_KEYS):
         raise ModelFormatError("second stage incomplete (missing %s)"
                                % ", ".join(k for k in SECOND_STAGE_KEYS if k not in arrays))
@@ -388,5 +398,8 @@ def _second_stage(arrays, count):
     threshold = np.asarray(arrays["second_threshold"], np.float64).ravel()
     if threshold.shape != (count,):
         raise ModelFormatError("second_threshold must have one value per domain (%d)" % count)
+    kind = arrays.get("second_kind", np.array("hog"))
+    if kind.dtype.kind != "U" or kind.size != 1:
+        raise ModelFormatError("field second_kind has the wrong type (%s)" % kind.dtype)
     return {"window": int(arrays["second_window"]), "weights": arrays["second_weights"],
-            "bias": float(arrays["second_bias"]), "threshold": list(threshold)}
+            "bias": float(arrays["second_bias"]), "threshold": list(threshold), "kind": str(kind)}

@@ -12,11 +12,14 @@ import cv2
 import numpy as np
 import pytest
 
+import host_tools.detection  # noqa: F401 (puts the camera module on the path)
 from host_tools.errors import ForaNavError
 from host_tools.jevois_host import DEFAULT_MODULE_DIR, camera_driver, camera_runtime
 from host_tools.maps import PlantationMap, Tree, load_map
 from host_tools.sim.camera import CameraModel, Pose
 from host_tools.sim.world import SENSOR_EFFECTS, World
+
+import foranav_features as features
 
 DRIVER = Path(camera_driver.__file__)
 DRIVER_TIMEOUT_S = 300
@@ -164,3 +167,24 @@ def test_that_only_the_explicit_opt_out_skips_it(monkeypatch, tmp_path):
     monkeypatch.setenv(camera_runtime.OPT_OUT_VARIABLE, "0")
     with pytest.raises(ForaNavError):
         camera_runtime.camera_python(tmp_path / "venv")
+
+
+RADIAL_ON_THE_CAMERA = """
+import json, sys
+import numpy as np
+sys.path.insert(0, sys.argv[1])
+import foranav_features as features
+ys, xs = np.mgrid[0:120, 0:120] - 59.5
+window = (128 + 90 * np.cos(7 * np.arctan2(ys, xs + 9.0)) * np.exp(-(xs * xs + ys * ys) / 4000.0)).astype(np.uint8)
+print(json.dumps([float(v) for v in features.second_stage_descriptor(window, 48, "hog+radial")]))
+"""
+
+
+def test_that_the_second_stage_descriptor_with_the_radial_cue_is_the_hosts_there(camera_python):
+    result = subprocess.run([str(camera_python), "-c", RADIAL_ON_THE_CAMERA, str(DEFAULT_MODULE_DIR)],
+                            capture_output=True, text=True, timeout=DRIVER_TIMEOUT_S, env=_camera_env())
+    assert result.returncode == 0, result.stderr[-3000:]
+    ys, xs = np.mgrid[0:120, 0:120] - 59.5
+    window = (128 + 90 * np.cos(7 * np.arctan2(ys, xs + 9.0)) * np.exp(-(xs * xs + ys * ys) / 4000.0)).astype(np.uint8)
+    host = features.second_stage_descriptor(window, 48, "hog+radial")
+    assert np.allclose(json.loads(result.stdout), host, atol=1e-4)
