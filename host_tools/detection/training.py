@@ -169,7 +169,8 @@ def train(data: Sequence[Imagery] | Sequence[dataset.Frame], species: str, seed:
 
 
 def _train_second_stage(model, imageries, learning, camera, species, seed, log, kind):
-    """The second stage: a linear SVM on SECOND_STAGE_WINDOW px HOG of the learning frames' windows, with
+    """The second stage: a linear SVM on the `kind` descriptor at SECOND_STAGE_WINDOW px (HOG, radial cue) of
+    the learning frames' windows, with
     the first stage's false alarms on survey frames as negatives (own random stream: the first stage's
     examples do not change)."""
     rng = np.random.RandomState(seed + 1)

@@ -17,7 +17,8 @@
 #      global HOG histogram on the full-resolution window (foranav_features.hog_texture: rejects other palm
 #      species).
 #      A model trained on survey imagery may add a second stage between the two: a linear SVM on a finer HOG
-#      of the window (foranav_features.second_stage_hog), trained on the first stage's false alarms.
+#      of the window and its radial cue (foranav_features.second_stage_descriptor), trained on the first
+#      stage's false alarms.
 #   6. A group that passes is one detection; its centre is the score^2-weighted mean of the refined centres
 #      of its members near the best one (a few pixels better than any single window on a lattice).
 # Every threshold is a setting (DetectorSettings) whose default comes from the model file. A model holds one

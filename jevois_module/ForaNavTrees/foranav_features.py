@@ -314,10 +314,19 @@ def second_stage_hog(value_window, side):
     """HOG of one full-resolution value window downscaled to side x side (the second stage's descriptor):
     the top layer's cells, blocks, bins and norms at twice its resolution, so the leaflets of a crown and
     the gap to its neighbours show. Length hog_descriptor_length(side) (2916 for 48)."""
+    return _hog_of_downscaled(_downscaled(value_window, side))
+
+
+def _downscaled(value_window, side):
+    """The value window resized to the second stage's side x side (checked: whole cells, at least a block)."""
     if side % HOG_CELL or side < HOG_BLOCK * HOG_CELL:
         raise ValueError("second-stage window must be a multiple of %d px, at least %d"
                          % (HOG_CELL, HOG_BLOCK * HOG_CELL))
-    small = cv2.resize(np.asarray(value_window), (side, side), interpolation=cv2.INTER_AREA)
+    return cv2.resize(np.asarray(value_window), (side, side), interpolation=cv2.INTER_AREA)
+
+
+def _hog_of_downscaled(small):
+    side = small.shape[0]
     codes, levels = gradient_levels(cv2.copyMakeBorder(small, 1, 1, 1, 1, cv2.BORDER_REPLICATE))
     codes, levels = codes[1:-1, 1:-1], levels[1:-1, 1:-1]
     n_cells = side // HOG_CELL
@@ -349,6 +358,9 @@ RADIAL_LENGTH = RADIAL_RINGS * RADIAL_BINS + 2 * RADIAL_RINGS
 RADIAL_GAIN = 3.0
 
 
+_RADIAL_GEOMETRY = {}
+
+
 def _radial_geometry(side):
     """(ring index, unit radial x, unit radial y) per pixel of a side x side window (cached)."""
     if side not in _RADIAL_GEOMETRY:
@@ -359,9 +371,6 @@ def _radial_geometry(side):
         safe = np.maximum(radius, 0.5)
         _RADIAL_GEOMETRY[side] = (ring, xs / safe, ys / safe)
     return _RADIAL_GEOMETRY[side]
-
-
-_RADIAL_GEOMETRY = {}
 
 
 def radial_descriptor(small_value):
@@ -401,11 +410,10 @@ def second_stage_descriptor(value_window, side, kind="hog"):
     "hog+radial", the radial cue of the same downscaled window."""
     if kind not in SECOND_STAGE_KINDS:
         raise ValueError("second-stage kind %r is not one of %s" % (kind, ", ".join(SECOND_STAGE_KINDS)))
-    hog = second_stage_hog(value_window, side)
     if kind == "hog":
-        return hog
-    small = cv2.resize(np.asarray(value_window), (side, side), interpolation=cv2.INTER_AREA)
-    return np.concatenate([hog, radial_descriptor(small)])
+        return second_stage_hog(value_window, side)
+    small = _downscaled(value_window, side)
+    return np.concatenate([_hog_of_downscaled(small), radial_descriptor(small)])
 
 
 def window_with_context(value, x0, y0, window):

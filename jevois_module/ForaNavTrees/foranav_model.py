@@ -36,7 +36,8 @@
 #   notes            str      free text: data, counts, figures (provenance)
 #   provenance       str      sources and licences of the training imagery
 # Optional (all four or none; models trained on survey imagery): the second stage, a linear SVM on a finer
-# HOG (foranav_features.second_stage_hog) that each group's best window must also pass.
+# HOG, with or without the radial cue (foranav_features.second_stage_descriptor), that each group's best window
+# must also pass.
 #   second_window    int      side of its downscaled window (48)
 #   second_weights   f32[n]   its weights (n = second_stage_length(second_window, second_kind))
 #   second_bias      f32

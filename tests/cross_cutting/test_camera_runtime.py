@@ -174,17 +174,18 @@ import json, sys
 import numpy as np
 sys.path.insert(0, sys.argv[1])
 import foranav_features as features
-ys, xs = np.mgrid[0:120, 0:120] - 59.5
-window = (128 + 90 * np.cos(7 * np.arctan2(ys, xs + 9.0)) * np.exp(-(xs * xs + ys * ys) / 4000.0)).astype(np.uint8)
+window = np.load(sys.argv[2], allow_pickle=False)
 print(json.dumps([float(v) for v in features.second_stage_descriptor(window, 48, "hog+radial")]))
 """
 
 
-def test_that_the_second_stage_descriptor_with_the_radial_cue_is_the_hosts_there(camera_python):
-    result = subprocess.run([str(camera_python), "-c", RADIAL_ON_THE_CAMERA, str(DEFAULT_MODULE_DIR)],
-                            capture_output=True, text=True, timeout=DRIVER_TIMEOUT_S, env=_camera_env())
-    assert result.returncode == 0, result.stderr[-3000:]
-    ys, xs = np.mgrid[0:120, 0:120] - 59.5
+def test_that_the_second_stage_descriptor_with_the_radial_cue_is_the_hosts_there(camera_python, tmp_path):
+    ys, xs = np.mgrid[0:120, 0:120] - 59.5  # a star of 7 rays about a point 9 px left of the centre
     window = (128 + 90 * np.cos(7 * np.arctan2(ys, xs + 9.0)) * np.exp(-(xs * xs + ys * ys) / 4000.0)).astype(np.uint8)
+    np.save(tmp_path / "window.npy", window, allow_pickle=False)
+    result = subprocess.run([str(camera_python), "-c", RADIAL_ON_THE_CAMERA, str(DEFAULT_MODULE_DIR),
+                             str(tmp_path / "window.npy")], capture_output=True, text=True, timeout=DRIVER_TIMEOUT_S,
+                            env=_camera_env())
+    assert result.returncode == 0, result.stderr[-3000:]
     host = features.second_stage_descriptor(window, 48, "hog+radial")
     assert np.allclose(json.loads(result.stdout), host, atol=1e-4)
