@@ -5,10 +5,11 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from host_tools.detection import evaluation
+from host_tools.detection import dataset, evaluation
 from host_tools.detection.dataset import Frame
 
 import foranav_detector as detector_core
+import foranav_features as features
 from foranav_model import TreeModel
 
 Log = Callable[[str], None]  # where progress lines go
@@ -21,14 +22,22 @@ SECOND_THRESHOLDS = (-1.0, -0.75, -0.5, -0.25, 0.0)  # second-stage thresholds s
 EDGE_THRESHOLDS = (-1.0, -0.5, 0.0, 0.5)  # candidates for the frame-edge test, searched on whole frames
 CROWN_RATIO_CENTRES = (0.9, 1.0, 1.1, 1.2, 1.3, 1.4, 1.5)  # window / crown, searched on whole survey frames
 CROWN_RATIO_SPREAD = (0.85, 1.0, 1.18)  # three window sizes around each centre (crowns vary in a frame)
+# Survey imagery: the texture threshold stays below TEXTURE_CAP_MARGIN x the least textured training image's
+# TEXTURE_CAP_QUANTILE of its crowns. The cue is gradient per pixel per unit of contrast, so it follows each
+# image's sharpness and zoom: the Google Earth training images' crowns differ by 2.4x, and a threshold chosen
+# on the sharpest one, held back, rejected every crown of the held-out image (docs/detector.md). The margin
+# leaves room for an image blurrier than every training image.
+TEXTURE_CAP_QUANTILE = 0.05
+TEXTURE_CAP_MARGIN = 0.5
 
 
 def calibrate(model: TreeModel, domain_index: int, frames: Sequence[Frame], rng: np.random.RandomState,
-              log: Log) -> None:
+              log: Log, texture_cap: float | None = None) -> None:
     """Choose one imagery's SVM, colour and variance thresholds on the crop-protocol windows of its held-back
     frames: the best balanced accuracy among the settings whose recall is at least MIN_RECALL (the paper's
     figure plus a margin); the SVM threshold is searched near 0 only, the colour and variance thresholds
-    over low quantiles of the positives (they exist to reject look-alikes, not trees)."""
+    over low quantiles of the positives (they exist to reject look-alikes, not trees), the variance
+    threshold no higher than texture_cap when one is given."""
     domain = model.domains[domain_index]
     crops = evaluation.sample_frame_crops(frames, model.species, model.window_margin, CALIBRATION_CROPS,
                                           CALIBRATION_CROPS, int(rng.randint(1 << 30)), copies=3)
@@ -48,6 +57,7 @@ def calibrate(model: TreeModel, domain_index: int, frames: Sequence[Frame], rng:
             hs = below_quantile(similarities[labels], hs_q)
             for var_q in CUE_QUANTILES:
                 var = below_quantile(variances[labels], var_q)
+                var = var if texture_cap is None else min(var, texture_cap)
                 first = detector_core.passes_thresholds(scores, similarities, variances, svm, hs, var)
                 for second in (SECOND_THRESHOLDS if has_second else (0.0,)):
                     predicted = first & (seconds > second) if has_second else first
@@ -63,6 +73,21 @@ def calibrate(model: TreeModel, domain_index: int, frames: Sequence[Frame], rng:
     log("%s: calibration on %d crops: accuracy %.3f recall %.3f at svm %.2f, colour %.3f, var %.4g%s"
         % (domain.name, len(crops), accuracy, recall, domain.svm_threshold, domain.hs_threshold,
            domain.variance_threshold, ", second stage %.2f" % domain.second_threshold if has_second else ""))
+
+
+def texture_cap(frames: Sequence[Frame], species: str, margin: float) -> float | None:
+    """TEXTURE_CAP_MARGIN x the lowest, over the imagery's frames, of the TEXTURE_CAP_QUANTILE of the texture
+    (foranav_features.hog_texture) of each frame's complete crowns, window = crown x margin; None without
+    such crowns."""
+    lowest = None
+    for frame in frames:
+        windows = [(box.x_center, box.y_center, dataset.crown_size(box) * margin) for box in frame.trees(species)]
+        textures = [features.hog_texture(frame.value[dataset.pixel_window(frame, cx, cy, side)])
+                    for cx, cy, side in windows if frame.window_fits(cx, cy, side)]
+        if textures:
+            quantile = float(np.percentile(textures, 100 * TEXTURE_CAP_QUANTILE))
+            lowest = quantile if lowest is None else min(lowest, quantile)
+    return None if lowest is None else TEXTURE_CAP_MARGIN * lowest
 
 
 def calibrate_edge(model: TreeModel, imagery_frames: Sequence[tuple[str, Sequence[Frame]]], log: Log) -> None:

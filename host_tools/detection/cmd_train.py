@@ -46,6 +46,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--second-stage", choices=features.SECOND_STAGE_KINDS, default=training.DEFAULT_SECOND_KIND,
                         help="descriptor of the survey models' second stage: the 48 px HOG, or it and the "
                         "radial cue (gradients against the lines from the window's centre); default %(default)s")
+    parser.add_argument("--second-views", type=int, choices=features.SECOND_STAGE_VIEWS,
+                        default=training.DEFAULT_SECOND_VIEWS,
+                        help="the second stage scores the window as it is (1) or the mean HOG of its four "
+                        "quarter turns (4); default %(default)s")
     parser.add_argument("--provenance", default="", metavar="TEXT",
                         help="sources and licences of the imagery, stored in the model file")
     parser.add_argument("--report", metavar="DIR", help="folder for report.md and its PNGs (default: MODEL "
@@ -112,7 +116,8 @@ def run(args: argparse.Namespace) -> int:
         model = training.train(imageries, args.species, seed=args.seed, window_sizes=windows,
                                reference_width=args.reference_width, margin=args.margin, log=log, crops=crops,
                                colour_kind=args.colour, colour_templates=args.colour_templates,
-                               provenance=args.provenance, second_kind=args.second_stage)
+                               provenance=args.provenance, second_kind=args.second_stage,
+                               second_views=args.second_views)
     except ValueError as err:
         raise ForaNavError(str(err))
     with fileio.atomic_path(args.out) as tmp:

@@ -31,7 +31,7 @@ from host_tools.detection import dataset
 from host_tools.detection.calibration import (  # noqa: F401  (training's names before the split)
     CALIBRATION_CROPS, CROWN_RATIO_CENTRES, CROWN_RATIO_SPREAD, CUE_QUANTILES, EDGE_THRESHOLDS, MIN_RECALL,
     SVM_THRESHOLDS, below_quantile as _below_quantile, calibrate as _calibrate, calibrate_edge as _calibrate_edge,
-    calibrate_frames as _calibrate_frames)
+    calibrate_frames as _calibrate_frames, texture_cap)
 from host_tools.detection.examples import (  # noqa: F401
     BACKGROUND_PER_FRAME, CENTRE_JITTER, COLOUR_SVM_C, HARD_NEGATIVE_SCORE, HARD_NEGATIVES_PER_FRAME,
     LOOKALIKE_COPIES, POSITIVE_COPIES, SHIFTED_PER_TREE, SIZE_JITTER, SURVEY_BACKGROUND_SCALE,
@@ -48,6 +48,7 @@ DEFAULT_REFERENCE_WIDTH = 352
 SECOND_STAGE_WINDOW = features.SECOND_STAGE_WINDOWS[0]
 SECOND_STAGE_C = 1.0
 DEFAULT_SECOND_KIND = "hog+radial"  # docs/detector.md: the radial cue lifts the crop protocol and frame F1
+DEFAULT_SECOND_VIEWS = 4  # docs/detector.md: the mean over the window's quarter turns lifts frame F1
 DEFAULT_MARGIN = 1.3  # window side / crown diameter: the crown plus a ring of ground (its outline)
 HARD_NEGATIVE_ROUNDS = 3
 SVM_C = 1.0
@@ -86,7 +87,7 @@ def train(data: Sequence[Imagery] | Sequence[dataset.Frame], species: str, seed:
           window_sizes: Sequence[int] = DEFAULT_WINDOW_SIZES, reference_width: int = DEFAULT_REFERENCE_WIDTH,
           margin: float = DEFAULT_MARGIN, log: Callable[[str], None] | None = None, crops: Sequence = (),
           colour_kind: str = "templates", colour_templates: int = 1, provenance: str = "",
-          second_kind: str = DEFAULT_SECOND_KIND) -> TreeModel:
+          second_kind: str = DEFAULT_SECOND_KIND, second_views: int = DEFAULT_SECOND_VIEWS) -> TreeModel:
     """Train a TreeModel for `species` from annotated imageries (or frames). Same inputs and seed -> same model.
 
     Each imagery's frames are split (seeded): the SVM learns from CALIBRATION_SPLIT's complement, and the
@@ -146,9 +147,10 @@ def train(data: Sequence[Imagery] | Sequence[dataset.Frame], species: str, seed:
             break
         negatives = np.vstack([negatives, hard])
     if any(not camera[im.name] for im in targets):  # survey imagery: camera (rendered) models stay one stage
-        _train_second_stage(model, imageries, learning, camera, species, seed, log, second_kind)
+        _train_second_stage(model, imageries, learning, camera, species, seed, log, second_kind, second_views)
     for index, imagery in enumerate(targets):
-        _calibrate(model, index, calibration[imagery.name] or learning[imagery.name], rng, log)
+        cap = None if camera[imagery.name] else texture_cap(imagery.frames, species, margin)
+        _calibrate(model, index, calibration[imagery.name] or learning[imagery.name], rng, log, cap)
     camera_targets = [im for im in targets if camera[im.name]]
     survey_targets = [im for im in targets if not camera[im.name]]
     if camera_targets:  # frames of one camera: the model's window sizes fit them
@@ -168,17 +170,17 @@ def train(data: Sequence[Imagery] | Sequence[dataset.Frame], species: str, seed:
     return model
 
 
-def _train_second_stage(model, imageries, learning, camera, species, seed, log, kind):
+def _train_second_stage(model, imageries, learning, camera, species, seed, log, kind, views):
     """The second stage: a linear SVM on the `kind` descriptor at SECOND_STAGE_WINDOW px (HOG, radial cue) of
-    the learning frames' windows, with
-    the first stage's false alarms on survey frames as negatives (own random stream: the first stage's
-    examples do not change)."""
+    the learning frames' windows, with the first stage's false alarms on survey frames as negatives (own
+    random stream: the first stage's examples do not change). It learns from single windows, each in a
+    random turn or mirror; `views` only sets how a window is scored (model.second_views)."""
     rng = np.random.RandomState(seed + 1)
     parts = [_second_stage_examples(learning[im.name], species, model, SECOND_STAGE_WINDOW, kind, rng,
                                     not camera[im.name]) for im in imageries]
     x = np.vstack([part[0] for part in parts])
     y = np.concatenate([part[1] for part in parts])
-    model.second_window, model.second_kind = SECOND_STAGE_WINDOW, kind
+    model.second_window, model.second_kind, model.second_views = SECOND_STAGE_WINDOW, kind, views
     model.second_weights, model.second_bias = train_linear_svm(x, y, c=SECOND_STAGE_C, seed=seed)
-    log("second stage: %d px %s, %d positives, %d negatives" % (SECOND_STAGE_WINDOW, kind, (y > 0).sum(),
-                                                                (y < 0).sum()))
+    log("second stage: %d px %s, %d view(s), %d positives, %d negatives"
+        % (SECOND_STAGE_WINDOW, kind, views, (y > 0).sum(), (y < 0).sum()))

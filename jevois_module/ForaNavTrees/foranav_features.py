@@ -349,6 +349,7 @@ def _hog_of_downscaled(small):
 # run along those lines; in a window between crowns or off a crown's centre they do not. Rotation- and
 # flip-invariant, so a few crowns teach it, where the HOG's 2916 per-cell weights need many.
 SECOND_STAGE_KINDS = ("hog", "hog+radial")
+SECOND_STAGE_VIEWS = (1, 4)  # the window as it is, or the mean over its four quarter turns
 RADIAL_RINGS = 5  # four rings of equal width inside the inscribed circle, and the corners outside it
 RADIAL_BINS = 6  # angle between a gradient and the radial line, 0..90 deg
 RADIAL_LENGTH = RADIAL_RINGS * RADIAL_BINS + 2 * RADIAL_RINGS
@@ -405,15 +406,29 @@ def second_stage_length(side, kind="hog"):
     return hog_descriptor_length(side) + (RADIAL_LENGTH if kind == "hog+radial" else 0)
 
 
-def second_stage_descriptor(value_window, side, kind="hog"):
+def second_stage_descriptor(value_window, side, kind="hog", views=1):
     """The second stage's descriptor of one full-resolution value window: its HOG at side px and, for kind
-    "hog+radial", the radial cue of the same downscaled window."""
+    "hog+radial", the radial cue of the same downscaled window. views 4: the HOG is the mean of the HOGs of
+    the downscaled window's four quarter turns (a crown seen from straight above has no "up", so a linear
+    score of the mean is the mean score over the turns; the radial cue is turn-invariant already)."""
     if kind not in SECOND_STAGE_KINDS:
         raise ValueError("second-stage kind %r is not one of %s" % (kind, ", ".join(SECOND_STAGE_KINDS)))
-    if kind == "hog":
-        return second_stage_hog(value_window, side)
+    if views not in SECOND_STAGE_VIEWS:
+        raise ValueError("second-stage views %r is not one of %s" % (views, SECOND_STAGE_VIEWS))
     small = _downscaled(value_window, side)
-    return np.concatenate([_hog_of_downscaled(small), radial_descriptor(small)])
+    hog = _hog_of_downscaled(small) if views == 1 else _mean_hog_of_turns(small, views)
+    if kind == "hog":
+        return hog
+    return np.concatenate([hog, radial_descriptor(small)])
+
+
+def _mean_hog_of_turns(small, turns):
+    """The mean HOG of the first `turns` quarter turns of a downscaled window (summed in float64, in order:
+    the same bytes on the camera's numpy as on the host's)."""
+    total = np.zeros(hog_descriptor_length(small.shape[0]), np.float64)
+    for turn in range(turns):
+        total += _hog_of_downscaled(np.ascontiguousarray(np.rot90(small, turn)))
+    return (total / turns).astype(np.float32)
 
 
 def window_with_context(value, x0, y0, window):

@@ -44,6 +44,7 @@
 #   second_threshold f32[D]   per domain, the score a detection's window must exceed
 #   second_kind      str      optional: "hog+radial" adds foranav_features.radial_descriptor to the HOG
 #                             (absent: "hog", the files written before it keep their bytes)
+#   second_views     int      optional: 4 scores the mean HOG of the window's four quarter turns (absent: 1)
 import zipfile
 
 import numpy as np
@@ -124,7 +125,8 @@ class TreeModel(object):
                  hs_threshold=-1.0, template_hue=None, template_sat=None, window_sizes=(96,), window_margin=1.3,
                  reference_width=352, seed=0, notes="", edge_threshold=DEFAULT_EDGE_THRESHOLD, domains=None,
                  colour_kind="templates", crown_ratios=None, provenance="", domain_name="default",
-                 second_window=None, second_weights=None, second_bias=0.0, second_kind="hog"):
+                 second_window=None, second_weights=None, second_bias=0.0, second_kind="hog",
+                 second_views=1):
         self.species = str(species)
         self.svm_weights = np.asarray(svm_weights, np.float32).ravel()
         self.svm_bias = float(svm_bias)
@@ -152,6 +154,7 @@ class TreeModel(object):
         self.second_weights = None if second_weights is None else np.asarray(second_weights, np.float32).ravel()
         self.second_bias = float(second_bias)
         self.second_kind = str(second_kind)
+        self.second_views = int(second_views)
         self.validate()
 
     # The first domain's values (single-imagery models, the camera's settings, older callers).
@@ -202,6 +205,9 @@ class TreeModel(object):
             if self.second_kind not in features.SECOND_STAGE_KINDS:
                 raise ModelFormatError("second_kind %r is not one of %s" % (self.second_kind,
                                                                           ", ".join(features.SECOND_STAGE_KINDS)))
+            if self.second_views not in features.SECOND_STAGE_VIEWS:
+                raise ModelFormatError("second_views %r is not one of %s" % (self.second_views,
+                                                                             features.SECOND_STAGE_VIEWS))
             length = features.second_stage_length(self.second_window, self.second_kind)
             if self.second_weights.shape != (length,):
                 raise ModelFormatError("second_weights has %d values, its descriptor has %d"
@@ -221,7 +227,8 @@ class TreeModel(object):
 
     def second_score(self, value_window):
         """The second stage's decision value of one full-resolution value window."""
-        descriptor = features.second_stage_descriptor(value_window, self.second_window, self.second_kind)
+        descriptor = features.second_stage_descriptor(value_window, self.second_window, self.second_kind,
+                                                      self.second_views)
         return float(np.dot(self.second_weights, descriptor)) + self.second_bias
 
     def to_arrays(self):
@@ -232,6 +239,8 @@ class TreeModel(object):
                           second_threshold=np.array([d.second_threshold for d in self.domains], np.float32))
             if self.second_kind != "hog":
                 arrays.update(second_kind=np.array(self.second_kind))
+            if self.second_views != 1:
+                arrays.update(second_views=np.array(self.second_views, np.int32))
         return arrays
 
     def _core_arrays(self):
@@ -378,7 +387,7 @@ def model_from_arrays(arrays, name="model"):
             reference_width=int(arrays["reference_width"]), crown_ratios=arrays["crown_ratios"],
             seed=int(arrays["seed"]), notes=str(arrays["notes"]), provenance=str(arrays["provenance"]),
             second_window=second["window"], second_weights=second["weights"], second_bias=second["bias"],
-            second_kind=second["kind"])
+            second_kind=second["kind"], second_views=second["views"])
     except ModelFormatError as err:
         raise ModelFormatError("%s: %s" % (name, err))
     except (TypeError, ValueError, IndexError) as err:
@@ -389,7 +398,8 @@ def _second_stage(arrays, count):
     """The optional second stage's fields: all four keys or none (window None: no second stage)."""
     present = [key for key in SECOND_STAGE_KEYS if key in arrays]
     if not present:
-        return {"window": None, "weights": None, "bias": 0.0, "threshold": [0.0] * count, "kind": "hog"}
+        return {"window": None, "weights": None, "bias": 0.0, "threshold": [0.0] * count, "kind": "hog",
+                "views": 1}
     if len(present) != len(SECOND_STAGE_KEYS):
         raise ModelFormatError("second stage incomplete (missing %s)"
                                % ", ".join(k for k in SECOND_STAGE_KEYS if k not in arrays))
@@ -402,5 +412,9 @@ def _second_stage(arrays, count):
     kind = arrays.get("second_kind", np.array("hog"))
     if kind.dtype.kind != "U" or kind.size != 1:
         raise ModelFormatError("field second_kind has the wrong type (%s)" % kind.dtype)
+    views = arrays.get("second_views", np.array(1))
+    if views.dtype.kind not in "iu" or views.size != 1:
+        raise ModelFormatError("field second_views has the wrong type (%s)" % views.dtype)
     return {"window": int(arrays["second_window"]), "weights": arrays["second_weights"],
-            "bias": float(arrays["second_bias"]), "threshold": list(threshold), "kind": str(kind)}
+            "bias": float(arrays["second_bias"]), "threshold": list(threshold), "kind": str(kind),
+            "views": int(views)}

@@ -64,17 +64,6 @@ def job(folder: Path, frames: list, side: str) -> dict:
 
 
 @pytest.fixture(scope="module")
-def camera_python():
-    try:
-        python = camera_runtime.camera_python()
-    except ForaNavError as err:
-        pytest.fail(str(err), pytrace=False)
-    if python is None:
-        pytest.skip("%s=1: no camera runtime on this machine" % camera_runtime.OPT_OUT_VARIABLE)
-    return python
-
-
-@pytest.fixture(scope="module")
 def both_runs(camera_python, tmp_path_factory):
     """The same job on the host (in this process) and in the camera runtime -> (host job, camera job)."""
     folder = tmp_path_factory.mktemp("camera_runtime")
@@ -175,11 +164,12 @@ import numpy as np
 sys.path.insert(0, sys.argv[1])
 import foranav_features as features
 window = np.load(sys.argv[2], allow_pickle=False)
-print(json.dumps([float(v) for v in features.second_stage_descriptor(window, 48, "hog+radial")]))
+print(json.dumps([[float(v) for v in features.second_stage_descriptor(window, 48, "hog+radial", views)]
+                  for views in features.SECOND_STAGE_VIEWS]))
 """
 
 
-def test_that_the_second_stage_descriptor_with_the_radial_cue_is_the_hosts_there(camera_python, tmp_path):
+def test_that_the_second_stage_descriptor_with_the_radial_cue_and_its_views_is_the_hosts_there(camera_python, tmp_path):
     ys, xs = np.mgrid[0:120, 0:120] - 59.5  # a star of 7 rays about a point 9 px left of the centre
     window = (128 + 90 * np.cos(7 * np.arctan2(ys, xs + 9.0)) * np.exp(-(xs * xs + ys * ys) / 4000.0)).astype(np.uint8)
     np.save(tmp_path / "window.npy", window, allow_pickle=False)
@@ -187,5 +177,7 @@ def test_that_the_second_stage_descriptor_with_the_radial_cue_is_the_hosts_there
                              str(tmp_path / "window.npy")], capture_output=True, text=True, timeout=DRIVER_TIMEOUT_S,
                             env=_camera_env())
     assert result.returncode == 0, result.stderr[-3000:]
-    host = features.second_stage_descriptor(window, 48, "hog+radial")
-    assert np.allclose(json.loads(result.stdout), host, atol=1e-4)
+    camera = json.loads(result.stdout)  # one descriptor per number of views
+    assert len(camera) == len(features.SECOND_STAGE_VIEWS) > 1
+    for views, values in zip(features.SECOND_STAGE_VIEWS, camera):
+        assert np.allclose(values, features.second_stage_descriptor(window, 48, "hog+radial", views), atol=1e-4)

@@ -1,7 +1,6 @@
 """Camera module settings: every value is checked on the way in (console and params.cfg alike), and a frame
 that fails anyway still ends with MARK STOP and logs its error once (issue #11 item 3)."""
 import io
-import os
 import subprocess
 
 import numpy as np
@@ -75,10 +74,6 @@ def test_that_a_frame_that_fails_still_ends_with_mark_stop_and_logs_the_error_on
     assert len(errors) == 2 and "400" in errors[1]
 
 
-# The camera's own interpreter (Python 3.7, numpy 1.16, OpenCV 4.10), when a scratch venv has one:
-#   ~/.pyenv/versions/3.7.16/bin/python -m venv /tmp/cam37 && /tmp/cam37/bin/pip install numpy==1.16.6 &&
-#   /tmp/cam37/bin/pip install --no-deps opencv-python-headless==4.10.0.84
-CAMERA_PYTHON = os.environ.get("FORANAV_CAMERA_PYTHON", "/tmp/cam37/bin/python")
 ON_THE_CAMERAS_PYTHON = """
 import importlib.util, io, sys
 import numpy as np
@@ -108,9 +103,9 @@ print(sys.version_info[:2], np.__version__)
 """
 
 
-@pytest.mark.skipif(not os.path.exists(CAMERA_PYTHON), reason="no camera interpreter (Python 3.7) here")
-def test_that_the_settings_checks_run_on_the_cameras_python():
-    proc = subprocess.run([CAMERA_PYTHON, "-c", ON_THE_CAMERAS_PYTHON, libjevois.__file__, DEFAULT_MODULE_DIR],
+def test_that_the_settings_checks_run_on_the_cameras_python(camera_python):
+    # the camera's own runtime (Python 3.7, numpy 1.16, OpenCV 4.10: make camera-runtime)
+    proc = subprocess.run([str(camera_python), "-c", ON_THE_CAMERAS_PYTHON, libjevois.__file__, DEFAULT_MODULE_DIR],
                           capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.startswith("(3, 7) 1.16")
