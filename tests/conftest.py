@@ -6,6 +6,9 @@ from pathlib import Path
 
 import pytest
 
+from host_tools.errors import ForaNavError
+from host_tools.jevois_host import camera_runtime
+
 REPO_ROOT = Path(__file__).resolve().parent.parent
 # committed inputs: CI clips, fault maps of docs/faults.md, an unseen map, the replay expectations
 FIXTURES = REPO_ROOT / "tests" / "fixtures"
@@ -16,8 +19,6 @@ MAP3_SHORT_SENSOR_CLIP = FIXTURES / "clips" / "map3_short_sensor"
 @pytest.fixture(scope="session")
 def camera_python():
     """The camera's own interpreter (Python 3.7, numpy 1.16, OpenCV 4.10), built by make camera-runtime."""
-    from host_tools.errors import ForaNavError
-    from host_tools.jevois_host import camera_runtime
     try:
         python = camera_runtime.camera_python()
     except ForaNavError as err:

@@ -169,7 +169,7 @@ print(json.dumps([[float(v) for v in features.second_stage_descriptor(window, 48
 """
 
 
-def test_that_the_second_stage_descriptor_with_the_radial_cue_and_its_views_is_the_hosts_there(camera_python, tmp_path):
+def test_that_the_second_stage_descriptor_in_every_view_is_the_hosts_there(camera_python, tmp_path):
     ys, xs = np.mgrid[0:120, 0:120] - 59.5  # a star of 7 rays about a point 9 px left of the centre
     window = (128 + 90 * np.cos(7 * np.arctan2(ys, xs + 9.0)) * np.exp(-(xs * xs + ys * ys) / 4000.0)).astype(np.uint8)
     np.save(tmp_path / "window.npy", window, allow_pickle=False)
