@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: setup test demo bench paper-tests deploy clean camera-runtime docs capp capp-asan bolt
+.PHONY: setup test demo bench paper-tests deploy clean camera-runtime docs capp capp-asan bolt firmware-sil
 
 setup: $(STAMP)
 
@@ -13,6 +13,7 @@ $(STAMP): pyproject.toml
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e '.[test]'
 	$(MAKE) capp
+	$(BIN)/python -m crazyflie_app.firmware.sil.build --if-available
 	touch $(STAMP)
 
 # The C flight app (crazyflie_app/bolt, docs/bolt.md). capp: the pure core as a host shared library, loaded by
@@ -56,7 +57,15 @@ bolt:
 	$(MAKE) -C $(CAPP_DIR) CRAZYFLIE_BASE=$(abspath $(CRAZYFLIE_BASE)) -j2
 	@ls -l $(CAPP_DIR)/build/bolt.bin
 
+# The firmware plant (foranav fly --plant firmware): the real Crazyflie firmware's commander, supervisor, PID
+# controller and Kalman estimator, built for the host with a rigid-body plant, and the firmware's cffirmware
+# bindings (crazyflie_app/firmware/sil/build.py). From ../shared/vendor/crazyflie-firmware-*.tar.gz or
+# FORANAV_FIRMWARE=PATH (a tarball or a checkout); make setup builds it when the firmware is there.
+firmware-sil: $(STAMP)
+	$(BIN)/python -m crazyflie_app.firmware.sil.build
+
 test: $(STAMP) capp camera-runtime
+	$(BIN)/python -m crazyflie_app.firmware.sil.build --if-available
 	$(BIN)/python -m pytest -q
 
 # The camera's own runtime (Python 3.7 + numpy 1.16.6 + OpenCV 4.10) in .venv-camera/, built once from the

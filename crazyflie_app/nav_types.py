@@ -45,7 +45,7 @@ class NavigationParams:
     takeoff_tolerance_m: float = 0.05  # height error that counts as "at altitude"
     takeoff_settle_ms: int = 1000  # held that long before the path starts
     land_height_m: float = 0.5  # Navigation.c lands in two 3 s steps: 0.5 m ...
-    land_final_m: float = 0.15  # ... then 0.15 m, then motors off
+    land_final_m: float = 0.15  # ... then 0.15 m (here: from 0.15 m down to the ground), then motors off
     land_step_ms: int = 3000
     arrival_min_speed: float = 0.02  # the follow law never crawls slower than this towards a waypoint
     cruise_speed: float = 0.10  # paper: <= 0.1 m/s

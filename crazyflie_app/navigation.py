@@ -224,7 +224,7 @@ PARAM_TABLE = param_group("app", [
     param_add(PARAM_FLOAT, "takeoffTol", "takeoff_tolerance_m", "m", "height error that counts as at altitude"),
     param_add(PARAM_UINT16, "takeoffSettle", "takeoff_settle_ms", "ms", "time at altitude before the path starts"),
     param_add(PARAM_FLOAT, "landHeight", "land_height_m", "m", "first landing step height (Navigation.c: 0.5 m)"),
-    param_add(PARAM_FLOAT, "landFinal", "land_final_m", "m", "second landing step height (Navigation.c: 0.15 m)"),
+    param_add(PARAM_FLOAT, "landFinal", "land_final_m", "m", "second landing step: from this height down to the ground (Navigation.c held 0.15 m)"),
     param_add(PARAM_UINT16, "landStep", "land_step_ms", "ms", "duration of each landing step (Navigation.c: 3 s)"),
     param_add(PARAM_FLOAT, "cruiseSpeed", "cruise_speed", "m/s", "speed along the path F (paper: <= 0.1 m/s)"),
     param_add(PARAM_FLOAT, "arrivalSpeed", "arrival_min_speed", "m/s",

@@ -1,6 +1,11 @@
 """Take-off and landing of the navigation core: the climb is done once the height has stayed within
-``takeoffTolerance`` of the flight height for ``takeoffSettle``; landing descends in two steps (Navigation.c:
-``landHeight`` for ``landStep``, then ``landFinal`` for as long), then the motors stop (null setpoints)."""
+``takeoffTolerance`` of the flight height for ``takeoffSettle``; landing descends to ``landHeight`` for
+``landStep`` (Navigation.c's first step), then from ``landFinal`` down to the ground over another ``landStep``,
+then the motors stop (null setpoints).
+
+Navigation.c held ``landFinal`` (0.15 m) and cut the motors there: on the firmware plant that drop hits the
+ground at 1.7 m/s, which the crash rule (and a Bolt's landing gear) does not forgive; the ramp touches down
+at the descent's speed (docs/flight-app.md)."""
 from crazyflie_app.nav_types import Command, NavigationParams, Pose
 
 NULL_COMMAND = Command("null", 0.0, 0.0, 0.0)
@@ -29,5 +34,6 @@ def landing_setpoint(params: NavigationParams, elapsed_ms: int) -> Command | Non
     if elapsed_ms < params.land_step_ms:
         return Command("hover", 0.0, 0.0, params.land_height_m)
     if elapsed_ms < 2 * params.land_step_ms:
-        return Command("hover", 0.0, 0.0, params.land_final_m)
+        remaining = 1.0 - (elapsed_ms - params.land_step_ms) / params.land_step_ms
+        return Command("hover", 0.0, 0.0, params.land_final_m * remaining)
     return None

@@ -10,8 +10,9 @@
   paper's rule alone would stop ~0.15 m off centre, so the tree is declared *reached* only once the
   filtered offset stays below ``settleRadius`` with the MAV slower than ``settleSpeed`` for ``settleDwell``
   (default 6 px ~ 2.3 cm at 1.25 m, 0.02 m/s, held 0.6 s), which keeps the mean deviation at a few mm
-  with an ideal camera. So that wind cannot stall the mission, after ``settleGrace`` (8 s) captured both
-  thresholds grow by ``settleRelax`` (1 px/s) up to tau: the deviation degrades gracefully instead.
+  with an ideal camera. So that wind cannot stall the mission, from ``settleGrace`` (8 s) after the first
+  capture both thresholds grow by ``settleRelax`` (1 px/s) up to tau: the deviation degrades gracefully
+  instead.
 """
 import math
 
@@ -85,9 +86,9 @@ class VisualServo:
         self.pixel_error = (eu, ev)
         error_px = math.hypot(eu, ev)
         self.captured = error_px < p.capture_radius_px  # the paper's tau: nearly centred
-        if not self.captured:
-            self._captured_since = None
-        elif self._captured_since is None:
+        # the relax clock runs from the first capture of this approach: a gust, or a hover jittering on the
+        # real firmware, that pushes the target past tau for a moment must not start it over
+        if self.captured and self._captured_since is None:
             self._captured_since = t_ms
         radius, speed = self.settle_thresholds(t_ms)
         if self.captured and error_px < radius and math.hypot(pose.vx, pose.vy) < speed:

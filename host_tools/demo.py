@@ -13,7 +13,8 @@ from pathlib import Path
 
 from crazyflie_app.navigation_core import NavigationParams
 from host_tools import argtypes, fileio
-from host_tools.flight.cmd_fly import print_table
+from host_tools.flight.cmd_fly import add_plant_argument, print_table
+from host_tools.flight.components import plant_config
 from host_tools.flight.harness import run_flight
 from host_tools.flight.vision_camera import VisionCamera, model_option
 from host_tools.maps import PlantationMap, load_map
@@ -32,6 +33,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--model", metavar="M", default=None,
                         help="the module runs with this model file (.npz) (default: the oil palm model)")
     add_appearance_arguments(parser)
+    add_plant_argument(parser)
 
 
 def estimated_mission_s(pmap: PlantationMap, cruise_speed: float) -> float:
@@ -73,6 +75,7 @@ class _Bar:
 def run(args: argparse.Namespace) -> int:
 
     out = fileio.check_output_dir(Path(args.out))
+    plant_config(args.plant, None)  # the firmware plant is built, or one line saying how
     pmap = load_map(DEMO_MAP)
     spec, _ = appearance_from_args(args, {t.species for t in pmap.trees}, "map %s" % DEMO_MAP)
     model = model_option(args.model) if args.model is not None else None
@@ -83,7 +86,7 @@ def run(args: argparse.Namespace) -> int:
     if photo_summary(camera.world):
         print("  " + photo_summary(camera.world))
     bar = _Bar(estimated_mission_s(pmap, NavigationParams().cruise_speed), sys.stdout)
-    summary = run_flight(pmap, camera, seed=args.seed, out_dir=out, progress=bar)
+    summary = run_flight(pmap, camera, seed=args.seed, out_dir=out, progress=bar, options={"plant": args.plant})
     bar.finish(summary["mission_time_s"])
     summary.pop("cpu_s", None)
     print()

@@ -69,6 +69,8 @@ class State:
     vy: float = 0.0
     vz: float = 0.0
     yaw: float = 0.0
+    roll: float = 0.0  # the reduced model flies level
+    pitch: float = 0.0
 
     def as_tuple(self) -> tuple[float, ...]:
         return (self.x, self.y, self.z, self.vx, self.vy, self.vz, self.yaw)
@@ -80,6 +82,9 @@ def _clamp(value: float, limit: float) -> float:
 
 class MavModel:
     """Truth (``self.truth``) and estimate (``self.estimate``), stepped by the stabilizer task."""
+
+    crashed = False  # the reduced model has no attitude to tumble on and lands at the controller's pace
+    crash_reason = None
 
     def __init__(self, config: MavModelConfig | None = None, seed: int = 0,
                  start: tuple[float, float, float] = (0.0, 0.0, 0.0), start_yaw_deg: float = 0.0):

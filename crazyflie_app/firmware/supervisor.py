@@ -53,6 +53,10 @@ class Supervisor:
         self._landed_since = None
 
     @property
+    def state_index(self) -> int:
+        return SUPERVISOR_STATES.index(self.state)
+
+    @property
     def watchdog_events(self) -> list[tuple[int, str]]:
         """Level-outs and locks so far (a healthy flight has none)."""
         return [e for e in self.events if e[1] in (WARNING_LEVEL_OUT, LOCKED)]

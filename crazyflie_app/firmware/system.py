@@ -1,9 +1,14 @@
 """The emulated Crazyflie: scheduler, commander, supervisor, stabilizer task, estimate, log/param, console.
 
-``Crazyflie(seed=..., model_config=..., decks=...)`` boots the services an app needs; ``x_task_create`` adds
-app tasks; ``run_until(tick)`` advances the whole system. The stabilizer task (priority 5, the highest) runs
-at the 100 Hz position-loop rate and additionally wakes on the exact tick of any watchdog threshold, so
-level-out and lock happen when the firmware would, without stepping Python at 1 kHz.
+``Crazyflie(seed=..., model_config=..., decks=..., plant=...)`` boots the services an app needs;
+``x_task_create`` adds app tasks; ``run_until(tick)`` advances the whole system. Commander, supervisor, plant
+and stabilizer task come from one of two flight stacks:
+
+* ``plant="reduced"`` (default, ``ReducedFlightStack``): the Python commander and supervisor and the reduced
+  MAV model; its stabilizer task runs at the 100 Hz position-loop rate and wakes on the exact tick of any
+  watchdog threshold, so level-out and lock happen when the firmware would, without stepping Python at 1 kHz;
+* ``plant="firmware"`` (``sil.plant.FirmwareFlightStack``): the real firmware's commander, supervisor, PID
+  controller and Kalman estimator in C over a rigid-body quadrotor, its stabilizer task every tick.
 """
 from collections.abc import Sequence
 from typing import Any
@@ -13,6 +18,8 @@ from crazyflie_app.firmware.commander import Commander
 from crazyflie_app.firmware.logparam import (LOG_FLOAT, LOG_UINT8, PARAM_UINT8, LogParamRegistry, log_add,
                                               log_group, param_add, param_group)
 from crazyflie_app.firmware.mav_model import MavModel, MavModelConfig
+from crazyflie_app.firmware.sil.plant import FirmwareFlightStack
+from crazyflie_app.firmware.sil.stack import FirmwarePlantConfig
 from crazyflie_app.firmware.supervisor import SUPERVISOR_STATES, Supervisor
 from crazyflie_app.firmware.uart2 import Uart2
 
@@ -20,6 +27,7 @@ STABILIZER_TASK_PRI = 5
 UART2_RX_TASK_PRI = 5  # stands in for the USART2 receive interrupt
 POSITION_RATE_HZ = 100  # RATE_100_HZ: the position controller's rate
 STABILIZER_PERIOD_MS = 1000 // POSITION_RATE_HZ
+PLANTS = ("reduced", "firmware")  # the reduced model (default) or the real firmware over a rigid body
 
 STATE_ESTIMATE_LOG = log_group("stateEstimate", [
     log_add(LOG_FLOAT, "x", "x", "m", "estimated position, global frame"),
@@ -29,10 +37,12 @@ STATE_ESTIMATE_LOG = log_group("stateEstimate", [
     log_add(LOG_FLOAT, "vy", "vy", "m/s", "estimated velocity, global frame"),
     log_add(LOG_FLOAT, "vz", "vz", "m/s", "estimated vertical velocity"),
     log_add(LOG_FLOAT, "yaw", "yaw", "deg", "estimated yaw, counter-clockwise"),
+    log_add(LOG_FLOAT, "roll", "roll", "deg", "estimated roll"),
+    log_add(LOG_FLOAT, "pitch", "pitch", "deg", "estimated pitch (the firmware's legacy sign: nose up)"),
 ])
 SUPERVISOR_LOG = log_group("supervisor", [
     log_add(LOG_UINT8, "info", "state_index", "", "supervisor state: " + ", ".join(
-        "%d %s" % (i, s) for i, s in enumerate(SUPERVISOR_STATES))),
+        "%d %s" % (i, s) for i, s in enumerate(SUPERVISOR_STATES)) + " (firmware plant: supervisorState_t)"),
 ])
 DECK_PARAM = param_group("deck", [
     param_add(PARAM_UINT8, "bcFlow2", "bcFlow2", "", "nonzero if the Flow deck v2 is attached", True),
@@ -52,7 +62,7 @@ class _SupervisorInfo:
 
     @property
     def state_index(self):
-        return SUPERVISOR_STATES.index(self._supervisor.state)
+        return self._supervisor.state_index
 
 
 class Console:
@@ -97,25 +107,33 @@ class _Forward:
 class Crazyflie:
     """One emulated flight controller. Firmware calls are methods with the firmware's snake_case names."""
 
-    def __init__(self, seed: int = 0, model_config: MavModelConfig | None = None,
+    def __init__(self, seed: int = 0, model_config: MavModelConfig | FirmwarePlantConfig | None = None,
                  decks: Sequence[str] = ("bcFlow2", "bcLoco"), start: tuple[float, float, float] = (0.0, 0.0, 0.0),
-                 require_arming: bool = True):
+                 require_arming: bool = True, plant: str = "reduced",
+                 bounds: tuple[float, float, float, float] | None = None):
         self.scheduler = freertos.Scheduler()
-        self.commander = Commander(self.scheduler)
         self.console = Console(self.scheduler)
-        # the Bolt (bolt_defconfig: CONFIG_MOTORS_REQUIRE_ARMING=y); require_arming=False: the CF2's auto-arming
-        self.supervisor = Supervisor(require_arming, console=lambda text: self.console.debug_print("SUP", text))
-        self.model = MavModel(model_config, seed=seed, start=start)
+        self.plant = plant
+        if plant == "firmware":
+            # the real firmware's commander, supervisor, controller and Kalman estimator over a rigid body
+            # (the Bolt build: arming always required); bounds place the Loco anchors around the flown area
+            self.stack = FirmwareFlightStack(self.scheduler, self.console.debug_print, seed,
+                                             model_config or FirmwarePlantConfig(), start,
+                                             bounds or (start[0], start[1], start[0], start[1]))
+        elif plant == "reduced":
+            self.stack = ReducedFlightStack(self.scheduler, self.console, seed, model_config, start, require_arming)
+        else:
+            raise ValueError("plant must be one of %s, got %r" % (", ".join(PLANTS), plant))
+        self.commander = self.stack.commander
+        self.supervisor = self.stack.supervisor
+        self.model = self.stack.model
         self.registry = LogParamRegistry()
         self.uart2 = None  # attach_uart2(url): the camera's wire on the deck port
         self.decks = _Decks(decks)
         self.registry.register_log_group(STATE_ESTIMATE_LOG, self.model.estimate)
         self.registry.register_log_group(SUPERVISOR_LOG, _SupervisorInfo(self.supervisor))
         self.registry.register_param_group(DECK_PARAM, self.decks)
-        self._last_physics_tick = 0
-        self._active_setpoint = self.commander.commander_get_setpoint()
-        self._motors_on = False
-        self.scheduler.x_task_create(self._stabilizer_task(), "STABILIZER", STABILIZER_TASK_PRI)
+        self.scheduler.x_task_create(self.stack.stabilizer_task(), "STABILIZER", STABILIZER_TASK_PRI)
 
     # -- firmware calls one service implements: FreeRTOS, commander, supervisor, UART2, log/param, console --
 
@@ -151,9 +169,35 @@ class Crazyflie:
         self.scheduler.x_task_create(self.uart2.rx_task(), "UART2_RX", UART2_RX_TASK_PRI)
         return self.uart2
 
-    # -- the stabilizer -----------------------------------------------------------------------------------
+    def replace_model(self, model: Any) -> None:
+        """Fly another MAV model on the reduced plant (a replay drives the MAV from a recorded clip)."""
+        if self.plant != "reduced":
+            raise ValueError("only the reduced plant's model can be replaced")
+        self.stack.model = self.model = model
 
-    def _stabilizer_task(self):
+    def close(self) -> None:
+        """Power off: release what the flight stack holds (the firmware plant's library copy)."""
+        close = getattr(self.stack, "close", None)
+        if close is not None:
+            close()
+
+
+class ReducedFlightStack:
+    """The default plant: the Python commander and supervisor and the reduced closed-loop MAV model
+    (commander.py, supervisor.py, mav_model.py), stepped by a stabilizer task at the position loop's rate."""
+
+    def __init__(self, scheduler: freertos.Scheduler, console: Console, seed: int,
+                 model_config: MavModelConfig | None, start: tuple[float, float, float], require_arming: bool):
+        self.scheduler = scheduler
+        self.commander = Commander(scheduler)
+        # the Bolt (bolt_defconfig: CONFIG_MOTORS_REQUIRE_ARMING=y); require_arming=False: the CF2's auto-arming
+        self.supervisor = Supervisor(require_arming, console=lambda text: console.debug_print("SUP", text))
+        self.model = MavModel(model_config, seed=seed, start=start)
+        self._last_physics_tick = 0
+        self._active_setpoint = self.commander.commander_get_setpoint()
+        self._motors_on = False
+
+    def stabilizer_task(self) -> freertos.Task:
         """commanderGetSetpoint -> supervisorUpdate -> override -> controller + plant, every 10 ms or on a
         watchdog threshold, whichever comes first."""
         while True:
@@ -171,4 +215,3 @@ class Crazyflie:
             if event is not None:
                 delay = min(delay, event - now)
             yield freertos.v_task_delay(delay)
-

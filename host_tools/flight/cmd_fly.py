@@ -10,9 +10,13 @@ Lockstep (default): one simulated clock, deterministic (same map and seed = same
 --realtime: the camera and the flight run as two processes sharing nothing but the pty, on the wall clock
 times --speed; --kill-camera-at S kills the camera process at S simulated seconds (the app holds, then lands).
 
+--plant firmware flies the real Crazyflie firmware's commander, supervisor, PID controller and Kalman
+estimator (built from the firmware source by `make firmware-sil`) over a rigid-body quadrotor; the app reads
+the Kalman filter's estimate, never the truth. --plant reduced (the default) is the reduced MAV model.
+
 Prints the flight summary (a short table, or the JSON object with --json) and writes flight.tlog (MAVLink 2),
 trajectory.png and summary.json into --out (default runs/fly-<map>-seed<N>/). Exit status 0 when the flight
-completed, 1 when it did not (crash, watchdog lock, time limit, camera never heard so never took off, camera
+completed, 1 when it did not (crash (CRASHED: tumbled or hit the ground faster than 1 m/s), watchdog lock, time limit, camera never heard so never took off, camera
 link lost in flight), 2 on bad input.
 
 Examples:
@@ -21,6 +25,7 @@ Examples:
   foranav fly --map map1 --silence 40:2 --garbage-rate 0.2
   foranav fly --map map1 --camera oracle
   foranav fly --map map1 --app c
+  foranav fly --map map1 --plant firmware --positioning flow
   foranav fly --map map2 --camera oracle --dropout 0.3 --json
   foranav fly --map map3 --camera oracle --hide-tree 6 --hide-s 5 --mavlink udpout:127.0.0.1:14550
   foranav fly --map map1 --crowns ../shared/data/real/oilpalm_gearth_detectree2/boxes.csv --model real.npz
@@ -37,6 +42,7 @@ from host_tools import argtypes, fileio
 from host_tools.errors import ForaNavError
 from host_tools.flight import camera_factory, run_flight
 from host_tools.flight.realtime import run_realtime
+from host_tools.flight.registry import PLANTS, POSITIONINGS, plant_model_options
 from host_tools.flight.vision_camera import model_option
 from host_tools.maps import load_map
 from host_tools.sim.cli_args import add_appearance_arguments, appearance_from_args, appearance_spec_from_args
@@ -83,8 +89,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         default=None, action=argtypes.Once,
                         help="camera mount offset from the MAV centre, body frame (m); sets the oracle's mount "
                              "and the app's app.camOffsetX/Y")
-    parser.add_argument("--estimator", choices=("uwb", "flow"), default="uwb",
-                        help="state estimate model: uwb (absolute, biased) or flow (drifting)")
+    parser.add_argument("--positioning", "--estimator", dest="positioning", choices=POSITIONINGS, default="uwb",
+                        help="uwb (default): Loco deck + Flow deck; flow: Flow deck alone (the estimate drifts). "
+                             "Reduced plant: the estimate's error model; firmware plant: the decks the Kalman "
+                             "filter fuses (--estimator is the older name)")
     parser.add_argument("--wind", type=argtypes.float_range(0.0, 20.0), default=0.0,
                         help="wind gust acceleration std (m/s^2)")
     parser.add_argument("--mavlink", help="also stream the telemetry live, e.g. udpout:127.0.0.1:14550")
@@ -94,12 +102,22 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_appearance_arguments(parser)
     parser.add_argument("--app", choices=APP_CHOICES, default="python",
                         help="flight app: python (default) or c (the C core of crazyflie_app/bolt, as on the Bolt)")
+    add_plant_argument(parser)
+
+
+def add_plant_argument(parser: argparse.ArgumentParser) -> None:
+    """--plant, as fly, paper-tests, sweep and demo take it."""
+    parser.add_argument("--plant", choices=PLANTS, default="reduced",
+                        help="reduced (default): the reduced MAV model with a noisy estimate; firmware: the real "
+                             "Crazyflie firmware (commander, supervisor, PID controller, Kalman estimator) over a "
+                             "rigid-body quadrotor with IMU, flow, ToF and UWB sensors (build it: make firmware-sil)")
 
 
 def flight_options(args: argparse.Namespace) -> dict:
     """The harness options of parsed fly arguments (ranges are the argument types'; sweeps build their flights
     with it)."""
-    options = {"dropout": args.dropout, "model": {"estimator": args.estimator, "wind_gust_mps2": args.wind},
+    options = {"dropout": args.dropout, "model": plant_model_options(args.plant, args.positioning, args.wind),
+               "plant": args.plant,
                "silence": [_window(text) for text in args.silence], "garbage_rate": args.garbage_rate,
                "partial_rate": args.partial_rate, "app": args.app}
     if args.hide_tree is not None:
@@ -160,6 +178,13 @@ def print_table(summary: dict, out: TextIO | None = None) -> None:
     print("  mean deviation %s m (95%% CI +/- %s); mission %.1f s; recoveries %d; watchdog events %d" % (
         "-" if mean is None else "%.3f" % mean, "-" if ci is None else "%.3f" % ci, summary["mission_time_s"],
         summary["recoveries"], summary["watchdog_events"]), file=out)
+    error = summary.get("estimate_error")
+    if error:
+        print("  %s plant: estimate error position %.3f / %.3f / %.3f m, yaw %.2f / %.2f / %.2f deg "
+              "(mean / p95 / max)" % ((summary["plant"],) + tuple(error["position_m"].values())
+                                      + tuple(error["yaw_deg"].values())), file=out)
+    if summary.get("crashed"):
+        print("  CRASHED: %s" % summary["crash"], file=out)
     vision = summary.get("vision")
     if vision:
         fps = vision.get("effective_fps", vision["fps"])  # realtime: the frames that actually arrived

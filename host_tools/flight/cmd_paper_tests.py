@@ -13,6 +13,7 @@ Examples:
   foranav paper-tests --tests 3,6 --jobs 1
   foranav paper-tests --crowns ../shared/data/real/oilpalm_gearth_detectree2/boxes.csv --model real.npz
   foranav paper-tests --app c
+  foranav paper-tests --plant firmware
 """
 import argparse
 import json
@@ -23,6 +24,8 @@ from pathlib import Path
 from host_tools import argtypes, fileio
 from host_tools.errors import ForaNavError
 from host_tools.flight import paper_tests
+from host_tools.flight.cmd_fly import add_plant_argument
+from host_tools.flight.components import plant_config
 from host_tools.flight.paper_tests import PAPER_TESTS
 from host_tools.flight.vision_camera import model_option
 from host_tools.maps import load_map
@@ -41,6 +44,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     add_appearance_arguments(parser)
     parser.add_argument("--app", choices=("python", "c"), default="python",
                         help="flight app: python (default) or c (the C core of crazyflie_app/bolt)")
+    add_plant_argument(parser)
 
 
 def _selected(text):
@@ -72,6 +76,7 @@ def run(args: argparse.Namespace) -> int:
     if args.jobs is not None and args.jobs < 1:
         raise ForaNavError("--jobs: must be at least 1")
     camera_kwargs = _camera_kwargs(args, tests)
+    plant_config(args.plant, None)  # the firmware plant is built, or one line saying how
     started = time.monotonic()
 
     def on_result(entry):
@@ -80,7 +85,7 @@ def run(args: argparse.Namespace) -> int:
                                                    else "FAIL", entry["wall_s"]), file=sys.stderr)
 
     results = paper_tests.run_tests(tests, out_dir=args.out, jobs=args.jobs, on_result=on_result,
-                                    camera_kwargs=camera_kwargs, app=args.app)
+                                    camera_kwargs=camera_kwargs, app=args.app, plant=args.plant)
     wall = round(time.monotonic() - started, 1)
     paths = paper_tests.write_outputs(results, Path(args.out), wall_s=wall, appearance=camera_kwargs.get("appearance"))
     if args.json:

@@ -13,6 +13,7 @@ import numpy as np
 from crazyflie_app.firmware import Crazyflie, MavModelConfig, v_task_delay
 from crazyflie_app.firmware.commander import setpoint_t
 from crazyflie_app.firmware.freertos import Task
+from crazyflie_app.firmware.sil.stack import FirmwarePlantConfig, FirmwarePlantUnavailable, check_available
 from crazyflie_app.firmware.supervisor import LANDED, LOCKED, WARNING_LEVEL_OUT
 from crazyflie_app.navigation_core import (PHASE_APPROACH, PHASE_DONE, PHASE_NAMES, PHASE_NO_CAMERA, PHASE_NO_DECK,
                                            rotate)
@@ -42,19 +43,20 @@ class FlightRig:
 
     def __init__(self, pmap: PlantationMap, camera: Camera, seed: int, options: dict):
         start = options["start"] or pmap.waypoints[0]
-        try:
-            model = MavModelConfig(**(options["model"] or {})).validate()
-        except (TypeError, ValueError) as err:
-            raise ForaNavError("flight option model: %s" % err)
+        model = plant_config(options["plant"], options["model"])
+        decks = tuple(options["decks"])
+        if options["plant"] == "firmware" and model.positioning == "flow":
+            decks = tuple(d for d in decks if d != "bcLoco")  # the firmware flies what is on board
         factory = app_factory(options["app"])
-        self.cf = Crazyflie(seed=seed, model_config=model, decks=tuple(options["decks"]),
-                            start=(float(start[0]), float(start[1]), 0.0))
+        self.cf = Crazyflie(seed=seed, model_config=model, decks=decks, start=(float(start[0]), float(start[1]), 0.0),
+                            plant=options["plant"], bounds=map_bounds(pmap))
         self.wire = PtyWire(lockstep=bool(options["lockstep"]))
         self.cf.attach_uart2(self.wire.slave_path)  # the camera's wire on the deck port
         try:
             self.app = factory(self.cf, pmap.waypoints, pmap.target_species)
         except BaseException:
             self.wire.close()
+            self.cf.close()
             raise
         registry = self.cf.registry
         registry.param_set("app.altitude", pmap.altitude_m)
@@ -84,6 +86,29 @@ class FlightRig:
     def close(self) -> None:
         self.app.link.close()
         self.wire.close()
+        self.cf.close()
+
+
+def plant_config(plant: str, model: dict | None) -> MavModelConfig | FirmwarePlantConfig:
+    """The plant's config from the flight option ``model`` (ForaNavError names a bad field, or says how to
+    build the firmware plant when it is not built)."""
+    if plant == "firmware":
+        try:
+            check_available()
+        except FirmwarePlantUnavailable as err:
+            raise ForaNavError("--plant firmware: %s" % err)
+    config_class = FirmwarePlantConfig if plant == "firmware" else MavModelConfig
+    try:
+        return config_class(**(model or {})).validate()
+    except (TypeError, ValueError) as err:
+        raise ForaNavError("flight option model: %s" % err)
+
+
+def map_bounds(pmap: PlantationMap) -> tuple[float, float, float, float]:
+    """(xmin, ymin, xmax, ymax) of the waypoints and trees: the area the Loco anchors surround."""
+    xs = [p[0] for p in pmap.waypoints] + [t.x for t in pmap.trees]
+    ys = [p[1] for p in pmap.waypoints] + [t.y for t in pmap.trees]
+    return (min(xs), min(ys), max(xs), max(ys))
 
 
 def open_tlog(out_dir: str | os.PathLike | None, options: dict) -> TlogWriter | None:
@@ -106,6 +131,7 @@ class FlightRecord:
         self.trajectory = []  # (t_ms, true x, y, est x, y, phase)
         self.detections = []  # world points of the detections, as the app placed them
         self.app_trees = []  # (id, x, y) trees the app stored
+        self.estimate_errors = []  # (horizontal position error m, yaw error deg) while airborne
         self.takeoff_ms = None
         self.done_ms = None
         self._null_reported = False
@@ -258,6 +284,16 @@ class CameraFeed:
             yield v_task_delay(wake - now)
 
 
+def yaw_difference(a_deg: float, b_deg: float) -> float:
+    """a - b wrapped into [-180, 180)."""
+    return (a_deg - b_deg + 180.0) % 360.0 - 180.0
+
+
+def estimate_error(truth, estimate) -> tuple[float, float]:
+    """(horizontal position error m, absolute yaw error deg) of the state estimate."""
+    return (math.hypot(estimate.x - truth.x, estimate.y - truth.y), abs(yaw_difference(estimate.yaw, truth.yaw)))
+
+
 class Monitor:
     """The lowest-priority harness task: samples the trajectory, writes telemetry, reports progress and
     stops the scheduler once the app is done and the MAV has landed."""
@@ -275,19 +311,23 @@ class Monitor:
             self.hide.update(now)
             if now % TRAJECTORY_PERIOD_MS == 0:
                 record.trajectory.append((now, truth.x, truth.y, est.x, est.y, phase))
+                if record.takeoff_ms is not None and record.done_ms is None:
+                    record.estimate_errors.append(estimate_error(truth, est))
             if record.tlog is not None:
                 if now % HEARTBEAT_PERIOD_MS == 0:
                     self._heartbeat(now, phase)
                 if now % TELEMETRY_PERIOD_MS == 0:
                     record.tlog.local_position(now, est.x, est.y, est.z, est.vx, est.vy, est.vz)
                     record.tlog.ground_truth(now, truth.x, truth.y, truth.z)
+                    record.tlog.estimate_error(now, est.x - truth.x, est.y - truth.y, yaw_difference(est.yaw, truth.yaw))
             if self.progress is not None and now % PROGRESS_PERIOD_MS == 0 and now > 0:
                 self.progress(now / 1000.0, PHASE_NAMES[phase])
             state = rig.cf.supervisor.state
-            if phase in (PHASE_DONE, PHASE_NO_DECK, PHASE_NO_CAMERA) or state == LOCKED:
+            crashed = rig.cf.model.crashed
+            if phase in (PHASE_DONE, PHASE_NO_DECK, PHASE_NO_CAMERA) or state == LOCKED or crashed:
                 if record.done_ms is None:
                     record.done_ms = now
-                landed = state in (LANDED, LOCKED) or phase in (PHASE_NO_DECK, PHASE_NO_CAMERA)
+                landed = state in (LANDED, LOCKED) or crashed or phase in (PHASE_NO_DECK, PHASE_NO_CAMERA)
                 if landed and now - record.done_ms >= AFTER_LANDING_MS:
                     rig.cf.scheduler.stop()
             yield v_task_delay(MONITOR_PERIOD_MS)

@@ -15,8 +15,10 @@ from host_tools.errors import ForaNavError
 DEFAULT_OPTIONS = {
     "dropout": 0.0, "hide_tree": None, "hide_s": 5.0, "hide_at_s": None, "silence": (), "garbage_rate": 0.0,
     "partial_rate": 0.0, "lockstep": True, "max_time_s": 900.0, "model": None, "params": None, "start": None,
-    "mavlink": None, "decks": ("bcFlow2", "bcLoco"), "app": "python",
+    "mavlink": None, "decks": ("bcFlow2", "bcLoco"), "app": "python", "plant": "reduced",
 }
+PLANTS = ("reduced", "firmware")  # the reduced MAV model (default), or the real firmware over a rigid body
+POSITIONINGS = ("uwb", "flow")  # Loco deck + Flow deck, or the Flow deck alone
 
 
 class Camera(Protocol):
@@ -69,7 +71,17 @@ def check_options(options: dict | None) -> dict:
             raise ForaNavError("flight option %s: must be a probability in [0, 1], got %r" % (key, merged[key]))
     if float(merged["hide_s"]) < 0 or float(merged["max_time_s"]) <= 0:
         raise ForaNavError("flight options hide_s / max_time_s must be positive")
+    if merged["plant"] not in PLANTS:
+        raise ForaNavError("flight option plant: unknown plant %r (have %s)" % (merged["plant"], ", ".join(PLANTS)))
     return merged
+
+
+def plant_model_options(plant: str, positioning: str, wind_gust_mps2: float) -> dict:
+    """The flight option ``model`` (the plant's config fields) for a positioning system and gust strength:
+    the reduced model draws its estimate error from the positioning (``estimator``), the firmware plant flies
+    the decks' sensors into the Kalman filter (``positioning``)."""
+    key = "positioning" if plant == "firmware" else "estimator"
+    return {key: positioning, "wind_gust_mps2": wind_gust_mps2}
 
 
 # -- the app: a component the flight is composed with -----------------------------------------------------------

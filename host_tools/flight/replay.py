@@ -35,6 +35,9 @@ SETPOINT_SAMPLE_MS = 100
 class _PlaybackModel:
     """Stands in for the MAV model: truth and estimate are the recorded pose at the playback time."""
 
+    crashed = False
+    crash_reason = None
+
     def __init__(self, model, frames, clock):
         self.truth, self.estimate = model.truth, model.estimate  # the objects the log/param tables point at
         self.config = model.config
@@ -71,7 +74,7 @@ class _ClipPlayer:
         self.flight, self.clip = flight, clip
         self.rig = flight.rig
         self.clip_t0_ms = None
-        self.rig.cf.model = _PlaybackModel(self.rig.cf.model, clip.frames, self.playback_s)
+        self.rig.cf.replace_model(_PlaybackModel(self.rig.cf.model, clip.frames, self.playback_s))
         self.delivery = harness.Delivery(self.rig.wire)
         self.score = DetectionScore()
         self.frame_rows = []  # per frame: index, t_s, detections (world), truth counts

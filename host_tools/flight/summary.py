@@ -1,4 +1,5 @@
 """Scoring of a finished flight: the summary record ``foranav fly`` prints and the sweeps store."""
+import math
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -8,6 +9,20 @@ from host_tools.flight.stats import mean_ci95
 
 if TYPE_CHECKING:  # the harness imports this module
     from host_tools.flight.harness import Flight
+
+
+def _figures(values: list[float], digits: int) -> dict:
+    ordered = sorted(values)
+    p95 = ordered[min(len(ordered) - 1, int(math.ceil(0.95 * len(ordered))) - 1)]
+    return {"mean": round(sum(ordered) / len(ordered), digits), "p95": round(p95, digits),
+            "max": round(ordered[-1], digits)}
+
+
+def error_figures(errors: list[tuple[float, float]]) -> dict | None:
+    """mean / p95 / max of the state estimate's position (m) and yaw (deg) errors while airborne."""
+    if not errors:
+        return None
+    return {"position_m": _figures([e[0] for e in errors], 4), "yaw_deg": _figures([e[1] for e in errors], 2)}
 
 
 def summarize(flight: "Flight") -> dict:
@@ -22,7 +37,8 @@ def summarize(flight: "Flight") -> dict:
     supervisor, app = rig.cf.supervisor, rig.app
     watchdog = [{"t_s": t / 1000.0, "state": s} for t, s in supervisor.watchdog_events]
     # a landing forced by a dead camera link is safe, but the mission was not completed
-    completed = app.phase == PHASE_DONE and supervisor.state != LOCKED and not app.core.link_aborted
+    completed = (app.phase == PHASE_DONE and supervisor.state != LOCKED and not app.core.link_aborted
+                 and not rig.cf.model.crashed)
     counts = {i: visits.count(i) for i in targets}
     success = (completed and all(c == 1 for c in counts.values()) and not non_targets
                and None not in visits and not watchdog)
@@ -53,6 +69,10 @@ def summarize(flight: "Flight") -> dict:
         "link_losses": counters.link_losses,
         "link_aborted": app.core.link_aborted,
         "camera_never_heard": app.phase == PHASE_NO_CAMERA,  # did not take off: not completed
+        "plant": flight.options["plant"],
+        "crashed": rig.cf.model.crashed,
+        "crash": rig.cf.model.crash_reason,
+        "estimate_error": error_figures(record.estimate_errors),
         "hidden_tree": flight.options["hide_tree"],
         "hidden_from_s": None if flight.hide.started_ms is None else flight.hide.started_ms / 1000.0,
     }

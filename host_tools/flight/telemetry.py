@@ -8,7 +8,8 @@ Frames: Crazyflie world is FLU (x forward, y left, z up); MAVLink local is NED w
 so x_N = x, y_E = -y, z_D = -z and yaw_NED = -yaw.
 
 Messages: HEARTBEAT (1 Hz; custom_mode = app phase, system_status from the supervisor), LOCAL_POSITION_NED
-of the estimate and DEBUG_VECT "gt_pos" of the ground truth (10 Hz), POSITION_TARGET_LOCAL_NED per accepted
+of the estimate, DEBUG_VECT "gt_pos" of the ground truth and DEBUG_VECT "est_err" of the estimate's error
+(x, y in NED metres, z = yaw error in degrees, NED sign) (10 Hz), POSITION_TARGET_LOCAL_NED per accepted
 setpoint (type mask 2531: vx, vy, z, yaw), LANDING_TARGET per detection (angles from the pixel, distance =
 height, target_num = tree id), STATUSTEXT per console line (split into 50-character chunks).
 """
@@ -77,6 +78,11 @@ class TlogWriter:
     def ground_truth(self, t_ms: int, x: float, y: float, z: float) -> None:
         self._at(t_ms)
         self.mav.debug_vect_send(b"gt_pos", EPOCH_US + int(t_ms) * 1000, x, -y, -z)
+
+    def estimate_error(self, t_ms: int, dx: float, dy: float, dyaw_deg: float) -> None:
+        """DEBUG_VECT "est_err": stateEstimate minus the truth (x, y in NED metres, yaw in degrees)."""
+        self._at(t_ms)
+        self.mav.debug_vect_send(b"est_err", EPOCH_US + int(t_ms) * 1000, dx, -dy, -dyaw_deg)
 
     def position_target(self, t_ms: int, vx_world: float, vy_world: float, z: float, yaw_deg: float) -> None:
         self._at(t_ms)

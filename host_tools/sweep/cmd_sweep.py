@@ -34,6 +34,8 @@ from pathlib import Path
 from host_tools import argtypes, fileio
 from host_tools.cmd_plantation import add_range_arguments, ranges_from_args
 from host_tools.errors import ForaNavError
+from host_tools.flight.cmd_fly import add_plant_argument
+from host_tools.flight.components import plant_config
 from host_tools.flight.vision_camera import model_option
 from host_tools.maps import SPECIES
 from host_tools.plantation import PlantationRanges
@@ -63,6 +65,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="LocalCluster worker processes (default: one per core)")
     parser.add_argument("--app", choices=("python", "c"), default="python",
                         help="flight app of every flight: python (default) or c (the C core of crazyflie_app/bolt)")
+    add_plant_argument(parser)
     parser.add_argument("--model", metavar="M", default=None,
                         help="sim: the module runs with this model file (.npz) in every flight")
     parser.add_argument("--crowns", nargs="+", action="extend", default=None, metavar="CSV",
@@ -80,6 +83,9 @@ def _fly_arguments(args):
     words = []
     if args.app != "python":
         words += ["--app", args.app]
+    if args.plant != "reduced":
+        plant_config(args.plant, None)  # built, or one line saying how
+        words += ["--plant", args.plant]
     if (args.model is not None or args.crowns) and args.camera != "sim":
         raise ForaNavError("--crowns/--model: only with --camera sim (the oracle sees no pixels)")
     if args.model is not None:

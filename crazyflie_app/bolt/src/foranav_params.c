@@ -172,7 +172,7 @@ PARAM_ADD(PARAM_UINT16, takeoffSettle, &appParams.takeoffSettle)
  */
 PARAM_ADD(PARAM_FLOAT, landHeight, &appParams.landHeight)
 /**
- * @brief second landing step height (Navigation.c: 0.15 m) (m)
+ * @brief second landing step: from this height down to the ground (Navigation.c held 0.15 m) (m)
  */
 PARAM_ADD(PARAM_FLOAT, landFinal, &appParams.landFinal)
 /**

@@ -163,9 +163,8 @@ static NavCommand stepApproach(NavCore* core, int32_t t_ms, const NavPose* pose)
   core->pixel_error[1] = ev;
   const double error_px = hypot(eu, ev);
   core->captured = error_px < p->capture_radius_px; /* the paper's tau: nearly centred */
-  if (!core->captured) {
-    core->has_captured_since = false;
-  } else if (!core->has_captured_since) {
+  /* the relax clock runs from the first capture of this approach (visual_servo.py says why) */
+  if (core->captured && !core->has_captured_since) {
     core->has_captured_since = true;
     core->captured_since = t_ms;
   }

@@ -27,7 +27,9 @@ NavCommand navStepLand(NavCore* core, int32_t t_ms) {
     return c;
   }
   if (elapsed < 2 * p->land_step_ms) {
-    NavCommand c = {NAV_CMD_HOVER, 0.0, 0.0, p->land_final_m};
+    /* down to the ground from landFinal: cutting the motors at landFinal drops the MAV at 1.7 m/s */
+    const double remaining = 1.0 - (double)(elapsed - p->land_step_ms) / p->land_step_ms;
+    NavCommand c = {NAV_CMD_HOVER, 0.0, 0.0, p->land_final_m * remaining};
     return c;
   }
   navEnterPhase(core, NAV_PHASE_DONE, t_ms);
