@@ -2,7 +2,8 @@
 
 sim:      rendered 352x288 camera frames per second on one core (plantation simulator); with --crowns CSV ...
           also over photo crowns, next to the procedural figures.
-flight:   simulated seconds per CPU second of an oracle flight (firmware emulation + app).
+flight:   simulated seconds per CPU second of an oracle flight (firmware emulation + app); --plant firmware
+          adds the firmware plant's flights beside the reduced plant's.
 detector: ms per frame and FPS of the tree detector at 352x288, 640x480 and 1280x1024, peak memory, and the
           speed-up over the per-window reference implementation.
 sweep:    flights per CPU-second and the 1 -> 2 Dask worker speed-up (--camera sim|oracle, --count N).
@@ -14,6 +15,7 @@ import argparse
 import importlib
 
 from host_tools import argtypes
+from crazyflie_app.firmware.system import PLANTS
 from host_tools.sim.cli_args import add_appearance_arguments
 
 TARGETS = {
@@ -35,6 +37,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--model", default=None,
                         help="recall: model file, or a shipped species (default: the shipped oil palm model)")
     add_appearance_arguments(parser)  # bench sim: --crowns / --ground
+    parser.add_argument("--plant", choices=PLANTS, default=None,
+                        help="flight: also fly the firmware plant (beside the reduced plant)")
 
 
 def run(args: argparse.Namespace) -> int:

@@ -8,6 +8,7 @@ from typing import Any, Protocol
 
 from crazyflie_app.c_app import CNavigationApp  # the C core's library is loaded (built if stale) on first use
 from crazyflie_app.firmware import Crazyflie
+from crazyflie_app.firmware.system import PLANTS
 from crazyflie_app.navigation import NavigationApp
 from crazyflie_app.uart2_link import Uart2Link
 from host_tools.errors import ForaNavError
@@ -17,7 +18,6 @@ DEFAULT_OPTIONS = {
     "partial_rate": 0.0, "lockstep": True, "max_time_s": 900.0, "model": None, "params": None, "start": None,
     "mavlink": None, "decks": ("bcFlow2", "bcLoco"), "app": "python", "plant": "reduced",
 }
-PLANTS = ("reduced", "firmware")  # the reduced MAV model (default), or the real firmware over a rigid body
 POSITIONINGS = ("uwb", "flow")  # Loco deck + Flow deck, or the Flow deck alone
 
 

@@ -16,7 +16,7 @@ import os
 import shutil
 import tempfile
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, field, fields
 
 from crazyflie_app.firmware import freertos
 from crazyflie_app.firmware.commander import setpoint_t
@@ -40,52 +40,61 @@ class FirmwarePlantUnavailable(RuntimeError):
     """The firmware plant's library is not built (or cannot be loaded): the message says how to build it."""
 
 
+def _setting(default, unit: str, doc: str):
+    """A FirmwarePlantConfig field with its unit and meaning (docs/reference/firmware-plant.md shows them)."""
+    return field(default=default, metadata={"unit": unit, "doc": doc})
+
+
 @dataclass
 class FirmwarePlantConfig:
     """The airframe, sensors and environment of the firmware plant. Defaults: a Bolt 1.1 on a 110 mm
     brushless frame carrying the Flow deck v2, the Loco deck and the JeVois (105 g, 2S LiPo)."""
-    mass_kg: float = 0.105
-    arm_m: float = 0.055
-    inertia_roll_kg_m2: float = 8.5e-5
-    inertia_pitch_kg_m2: float = 8.5e-5
-    inertia_yaw_kg_m2: float = 1.5e-4
-    thrust_max_n: float = 0.85  # one motor, full command, at reference_v: hover near PWM 36000 (thrustBase)
-    torque_per_thrust_m: float = 0.01
-    motor_tau_s: float = 0.015
-    drag_xy_n_per_mps: float = 0.03
-    drag_z_n_per_mps: float = 0.03
-    angular_drag_nm_per_radps: float = 2e-6
-    battery_full_v: float = 8.4
-    battery_empty_v: float = 7.0
-    battery_capacity_mah: float = 450.0
-    battery_resistance_ohm: float = 0.08
-    reference_v: float = 8.0
-    hover_current_a: float = 2.5
-    gyro_noise_dps: float = 0.2
-    gyro_bias_dps: float = 0.05
-    acc_noise_g: float = 0.004
-    acc_bias_g: float = 0.002
-    flow_noise_px: float = 1.0
-    ground_texture: float = 1.0
-    light: float = 1.0
-    tof_noise_m: float = 0.003
-    tof_max_m: float = 4.0
-    positioning: str = "uwb"
-    uwb_noise_m: float = 0.05
-    uwb_nlos_probability: float = 0.03
-    uwb_nlos_max_m: float = 1.5
-    wind_gust_mps2: float = 0.0
-    wind_tau_s: float = 2.0
+    mass_kg: float = _setting(0.105, "kg", "take-off mass: frame, Bolt, Flow and Loco decks, JeVois, 2S battery")
+    arm_m: float = _setting(0.055, "m", "motor axis to centre (a 110 mm diagonal X frame)")
+    inertia_roll_kg_m2: float = _setting(8.5e-5, "kg m^2", "moment of inertia about the body x axis")
+    inertia_pitch_kg_m2: float = _setting(8.5e-5, "kg m^2", "moment of inertia about the body y axis")
+    inertia_yaw_kg_m2: float = _setting(1.5e-4, "kg m^2", "moment of inertia about the body z axis")
+    thrust_max_n: float = _setting(0.85, "N", "one motor at full command and reference_v; with thrust growing "
+                                   "with the square of the command, hover needs PWM ~36000 (posCtlPid.thrustBase)")
+    torque_per_thrust_m: float = _setting(0.01, "m", "propeller drag torque per newton of thrust (yaw authority)")
+    motor_tau_s: float = _setting(0.015, "s", "motor speed lag (first order)")
+    drag_xy_n_per_mps: float = _setting(0.03, "N s/m", "horizontal linear drag")
+    drag_z_n_per_mps: float = _setting(0.03, "N s/m", "vertical linear drag")
+    angular_drag_nm_per_radps: float = _setting(2e-6, "N m s", "rotational damping")
+    battery_full_v: float = _setting(8.4, "V", "2S LiPo, charged")
+    battery_empty_v: float = _setting(7.0, "V", "open-circuit voltage when the capacity is used up")
+    battery_capacity_mah: float = _setting(450.0, "mAh", "capacity")
+    battery_resistance_ohm: float = _setting(0.08, "ohm", "internal resistance: the sag under load")
+    reference_v: float = _setting(8.0, "V", "the voltage thrust_max_n is given at (motor speed scales with it)")
+    hover_current_a: float = _setting(2.5, "A", "current at hover thrust (it grows with thrust^1.5)")
+    gyro_noise_dps: float = _setting(0.2, "deg/s", "BMI088 gyro white noise per sample (1 kHz)")
+    gyro_bias_dps: float = _setting(0.05, "deg/s", "std of the gyro bias left after the driver's calibration: "
+                                    "the yaw estimate drifts by it (no magnetometer)")
+    acc_noise_g: float = _setting(0.004, "g", "accelerometer white noise per sample")
+    acc_bias_g: float = _setting(0.002, "g", "std of the accelerometer bias")
+    flow_noise_px: float = _setting(1.0, "counts", "PMW3901 noise (the sensor's units: 10x pixels)")
+    ground_texture: float = _setting(1.0, "0..1", "ground texture the flow sensor tracks: below 0.35 frames lose "
+                                     "the motion flag, below 0.5 the counts under-read, noise grows as it falls")
+    light: float = _setting(1.0, "0..1", "light level: below 0.3 the flow sensor's quality falls with it")
+    tof_noise_m: float = _setting(0.003, "m", "VL53L1x range noise")
+    tof_max_m: float = _setting(4.0, "m", "VL53L1x range limit (past it: out-of-range readings, dropped)")
+    positioning: str = _setting("uwb", "", "uwb: Loco deck ranging to 8 anchors + Flow deck; flow: Flow deck alone")
+    uwb_noise_m: float = _setting(0.05, "m", "TWR range noise")
+    uwb_nlos_probability: float = _setting(0.03, "0..1", "chance that a range is non-line-of-sight (too long)")
+    uwb_nlos_max_m: float = _setting(1.5, "m", "NLOS ranges are long by U(0.2 m, this)")
+    wind_gust_mps2: float = _setting(0.0, "m/s^2", "std of the gust acceleration, applied as a force (the "
+                                     "sweeps' wind condition)")
+    wind_tau_s: float = _setting(2.0, "s", "gust correlation time (Ornstein-Uhlenbeck)")
 
     def validate(self) -> "FirmwarePlantConfig":
         if self.positioning not in POSITIONINGS:
             raise ValueError("positioning must be one of %s, got %r" % (", ".join(POSITIONINGS), self.positioning))
-        for field in fields(self):
-            if field.name == "positioning":
+        for setting in fields(self):
+            if setting.name == "positioning":
                 continue
-            value = getattr(self, field.name)
-            if not isinstance(value, (int, float)) or not math.isfinite(value) or value < 0:
-                raise ValueError("%s must be a finite number >= 0, got %r" % (field.name, value))
+            value = getattr(self, setting.name)
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value < 0:
+                raise ValueError("%s must be a finite number >= 0, got %r" % (setting.name, value))
         for name in ("mass_kg", "arm_m", "inertia_roll_kg_m2", "inertia_pitch_kg_m2", "inertia_yaw_kg_m2",
                      "thrust_max_n", "motor_tau_s", "battery_capacity_mah", "reference_v", "wind_tau_s"):
             if getattr(self, name) <= 0:
@@ -192,9 +201,9 @@ def anchor_positions(bounds: tuple[float, float, float, float]) -> list[tuple[fl
 
 def _c_config(config: FirmwarePlantConfig, seed: int, start: Sequence[float], anchors: Sequence) -> _Config:
     c = _Config()
-    for field in fields(config):
-        if hasattr(c, field.name) and field.name != "positioning":
-            setattr(c, field.name, getattr(config, field.name))
+    for setting in fields(config):
+        if hasattr(c, setting.name) and setting.name != "positioning":
+            setattr(c, setting.name, getattr(config, setting.name))
     c.inertia_kg_m2[:] = (config.inertia_roll_kg_m2, config.inertia_pitch_kg_m2, config.inertia_yaw_kg_m2)
     c.drag_n_per_mps[:] = (config.drag_xy_n_per_mps, config.drag_xy_n_per_mps, config.drag_z_n_per_mps)
     c.positioning = POSITIONINGS.index(config.positioning)

@@ -106,3 +106,10 @@ int sil_supervisor_request_arming(int do_arm);
 const char *sil_supervisor_state_name(int state);
 /* Copy (and forget) the console text printed since the last call; returns its length. */
 int sil_console_read(char *buffer, int size);
+
+/* One call of this build's controllerPid + powerDistribution + powerDistributionCap on the given inputs,
+ * outside the loop (on a library that is not booted): the tests compare it with the firmware's own cffirmware
+ * bindings. out: thrust, roll, pitch, yaw of control_t, then the four capped motor PWM values. */
+void sil_probe_controller_init(void);
+void sil_probe_controller(const sil_setpoint_t *setpoint, const sil_state_t *state, const double gyro[3],
+                          uint32_t step, double out[8]);

@@ -243,7 +243,7 @@ void sil_advance_to(uint32_t tick) {
   }
 }
 
-int sil_commander_set_setpoint(const sil_setpoint_t *in, int priority) {
+static void toFirmwareSetpoint(const sil_setpoint_t *in, setpoint_t *out) {
   setpoint_t sp;
   memset(&sp, 0, sizeof(sp));
   sp.mode.x = (stab_mode_t)in->mode_x;
@@ -266,6 +266,12 @@ int sil_commander_set_setpoint(const sil_setpoint_t *in, int priority) {
   sp.attitudeRate.yaw = (float)in->attitude_rate[2];
   sp.thrust = (float)in->thrust;
   sp.velocity_body = in->velocity_body != 0;
+  *out = sp;
+}
+
+int sil_commander_set_setpoint(const sil_setpoint_t *in, int priority) {
+  setpoint_t sp;
+  toFirmwareSetpoint(in, &sp);
   const int accepted = priority >= commanderGetActivePriority();
   commanderSetSetpoint(&sp, priority);
   return accepted;
@@ -289,4 +295,45 @@ int sil_console_read(char *buffer, int size) {
   const int length = silShimConsoleRead(buffer, size);
   statusOut->console_pending = silShimConsolePending();
   return length;
+}
+
+void sil_probe_controller_init(void) {
+  controllerPidInit();
+  powerDistributionInit();
+}
+
+void sil_probe_controller(const sil_setpoint_t *in, const sil_state_t *estimate, const double gyro[3], uint32_t step,
+                          double out[8]) {
+  setpoint_t sp;
+  toFirmwareSetpoint(in, &sp);
+  state_t st;
+  memset(&st, 0, sizeof(st));
+  st.position.x = (float)estimate->x;
+  st.position.y = (float)estimate->y;
+  st.position.z = (float)estimate->z;
+  st.velocity.x = (float)estimate->vx;
+  st.velocity.y = (float)estimate->vy;
+  st.velocity.z = (float)estimate->vz;
+  st.attitude.roll = (float)estimate->roll;
+  st.attitude.pitch = (float)estimate->pitch;
+  st.attitude.yaw = (float)estimate->yaw;
+  sensorData_t sensors;
+  memset(&sensors, 0, sizeof(sensors));
+  sensors.gyro.x = (float)gyro[0];
+  sensors.gyro.y = (float)gyro[1];
+  sensors.gyro.z = (float)gyro[2];
+  control_t c;
+  memset(&c, 0, sizeof(c));
+  controllerPid(&c, &sp, &sensors, &st, step);
+  motors_thrust_uncapped_t uncapped;
+  motors_thrust_pwm_t pwm;
+  powerDistribution(&c, &uncapped);
+  powerDistributionCap(&uncapped, &pwm);
+  out[0] = c.thrust;
+  out[1] = c.roll;
+  out[2] = c.pitch;
+  out[3] = c.yaw;
+  for (int i = 0; i < 4; i++) {
+    out[4 + i] = pwm.list[i];
+  }
 }
