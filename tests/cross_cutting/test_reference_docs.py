@@ -62,5 +62,6 @@ def test_that_the_generator_writes_the_files_and_check_then_passes(tmp_path):
 
     assert run("--check").returncode == 1
     assert run().returncode == 0
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["camera-params.md", "commands.md", "params.md"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["camera-params.md", "commands.md", "firmware-plant.md",
+                                                          "params.md"]
     assert run("--check").returncode == 0
