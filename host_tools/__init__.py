@@ -7,3 +7,15 @@ import os
 # host_tools.detection.threads.single_threaded() for when numpy was loaded by someone else.
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 os.environ.setdefault("OMP_NUM_THREADS", "1")
+
+# numpy asks the kernel for huge pages on every large array; a flight allocates and frees frame-sized arrays
+# ~20 times a frame, and each fresh huge page is zeroed by the kernel: about a second of system time per
+# vision flight (docs/results.md, "Cost of a vision flight"). Small pages cost a tenth of that.
+os.environ.setdefault("NUMPY_MADVISE_HUGEPAGE", "0")
+
+
+def small_pages_for_numpy() -> None:
+    """The same, for a process that loaded numpy before this package (a Dask worker)."""
+    import numpy  # noqa: PLC0415  (loaded already: this only reaches its switch)
+    core = getattr(numpy, "_core", None) or getattr(numpy, "core")
+    core.multiarray._set_madvise_hugepage(False)

@@ -29,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from host_tools.detection.threads import single_threaded
 from host_tools.errors import ForaNavError
 from host_tools.flight.harness import Progress, register_camera, run_flight
 from host_tools.jevois_host import ModuleRunner, NullLog
@@ -143,6 +144,9 @@ class VisionCamera:
         if effects not in EFFECTS:
             raise ValueError("effects must be one of %s, got %r" % (", ".join(sorted(EFFECTS)), effects))
 
+        # one frame at a time on one core, as the camera: OpenCV's thread pool spin-waits (sched_yield) between
+        # the small calls of a frame, a second of system time per flight for nothing (same pixels either way)
+        single_threaded()
         self.pmap = pmap
         self.frame_period_ms = int(frame_period_ms)
         self.latency_ms = int(DEFAULT_LATENCY_FRAMES * self.frame_period_ms if latency_ms is None else latency_ms)

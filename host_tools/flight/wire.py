@@ -4,15 +4,20 @@
 UART, and the harness writes the camera's bytes into the master side. In lockstep mode ``write`` returns
 only once the bytes are readable on the slave side (ioctl FIONREAD), so the simulated clock never runs ahead
 of the kernel and a run is deterministic: same map and seed, same bytes read at the same simulated ticks.
+The wait sleeps in poll() until the kernel hands the first byte over (it used to spin on FIONREAD, which cost
+a vision flight about a second of system time), and naps briefly while the rest follows.
 """
 import fcntl
 import os
+import select
 import struct
 import termios
 import time
 import tty
 
 LOCKSTEP_TIMEOUT_S = 5.0  # wall-clock limit for bytes to cross the pty (normally microseconds)
+POLL_SLICE_MS = 100  # one poll() while waiting for the first byte (the deadline is checked between slices)
+PARTIAL_NAP_S = 20e-6  # the first bytes are there, the rest is on its way
 
 
 class WireError(RuntimeError):
@@ -29,6 +34,8 @@ class PtyWire:
         self.slave_path = os.ttyname(self.slave_fd)
         self.lockstep = lockstep
         self.bytes_written = 0
+        self._readable = select.poll()
+        self._readable.register(self.slave_fd, select.POLLIN)
 
     def pending(self) -> int:
         """Bytes written but not yet read on the slave side."""
@@ -45,11 +52,21 @@ class PtyWire:
             view = view[written:]
         self.bytes_written += len(data)
         if self.lockstep:
-            deadline = time.monotonic() + LOCKSTEP_TIMEOUT_S
-            while self.pending() < before + len(data):
-                if time.monotonic() > deadline:
-                    raise WireError("pty: %d bytes did not reach the slave side" % len(data))
-                time.sleep(0)
+            self._wait_readable(before + len(data))
+
+    def _wait_readable(self, count: int) -> None:
+        """Return once ``count`` bytes are readable on the slave side (WireError after LOCKSTEP_TIMEOUT_S)."""
+        deadline = time.monotonic() + LOCKSTEP_TIMEOUT_S
+        while True:
+            have = self.pending()
+            if have >= count:
+                return
+            if time.monotonic() > deadline:
+                raise WireError("pty: %d bytes did not reach the slave side" % (count - have))
+            if have == 0:
+                self._readable.poll(POLL_SLICE_MS)  # sleeps until the kernel delivers the first byte
+            else:
+                time.sleep(PARTIAL_NAP_S)
 
     def close(self) -> None:
         for fd in (self.master_fd, self.slave_fd):

@@ -16,6 +16,7 @@ from typing import Any
 
 import cv2
 
+from host_tools import small_pages_for_numpy
 from host_tools.errors import ForaNavError
 from host_tools.flight.harness import fly
 from host_tools.sweep.conditions import harness_inputs
@@ -27,6 +28,7 @@ def fly_task(spec: dict) -> dict:
     # one OpenCV thread per worker process: the workers already fill the cores, and idle OpenCV threads
     # spinning on a shared machine cost CPU; results do not depend on it
     cv2.setNumThreads(1)
+    small_pages_for_numpy()
 
     # process CPU: the renderer's OpenCV threads count too (a worker runs one task at a time)
     wall0, cpu0 = time.perf_counter(), time.process_time()
