@@ -3,7 +3,8 @@
 sim:      rendered 352x288 camera frames per second on one core (plantation simulator); with --crowns CSV ...
           also over photo crowns, next to the procedural figures.
 flight:   simulated seconds per CPU second of an oracle flight (firmware emulation + app); --plant firmware
-          adds the firmware plant's flights beside the reduced plant's.
+          adds the firmware plant's flights beside the reduced plant's; --camera sim: CPU of a vision flight
+          against an oracle flight of the same map, user vs system, and the vision flight's CPU by stage.
 detector: ms per frame and FPS of the tree detector at 352x288, 640x480 and 1280x1024, peak memory, and the
           speed-up over the per-window reference implementation.
 sweep:    flights per CPU-second and the 1 -> 2 Dask worker speed-up (--camera sim|oracle, --count N).
@@ -31,7 +32,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("target", choices=sorted(TARGETS), help="what to benchmark")
     parser.add_argument("--json", action="store_true", help="print one JSON object instead of a table")
     parser.add_argument("--seed", type=argtypes.seed, default=0, help="seed of the rendered test frames")
-    parser.add_argument("--camera", choices=("sim", "oracle"), default=None, help="sweep: camera (default sim)")
+    parser.add_argument("--camera", choices=("sim", "oracle"), default=None,
+                        help="sweep: camera (default sim); flight: sim compares vision and oracle flights")
     parser.add_argument("--count", type=argtypes.int_range(1, 100000), default=None,
                         help="sweep: flights per worker count (default 6); recall: frames per case (default 150)")
     parser.add_argument("--model", default=None,

@@ -8,6 +8,7 @@ two of its own delays, so shared state needs no locks; FreeRTOS time slicing at 
 Everything is deterministic: no wall clock, no threads.
 """
 import heapq
+import time
 from collections.abc import Iterator
 
 TICK_RATE_HZ = 1000  # configTICK_RATE_HZ: 1 tick = 1 ms
@@ -62,6 +63,11 @@ class Scheduler:
         self._ready = []  # heap of (wake_tick, -priority, creation_order, name, generator)
         self._created = 0
         self.stopped = False
+        self.task_cpu_s = None  # {task name: CPU seconds in its steps}, once profile() is called
+
+    def profile(self) -> None:
+        """Count the CPU time each task spends (benchmarks: where a flight's time goes); off by default."""
+        self.task_cpu_s = {}
 
     def x_task_get_tick_count(self) -> int:
         return self._now
@@ -78,10 +84,14 @@ class Scheduler:
         while self._ready and self._ready[0][0] < tick and not self.stopped:
             wake, neg_priority, order, name, task = heapq.heappop(self._ready)
             self._now = wake
+            cpu0 = time.process_time() if self.task_cpu_s is not None else None
             try:
                 delay = next(task)
             except StopIteration:
                 continue
+            finally:
+                if cpu0 is not None:
+                    self.task_cpu_s[name] = self.task_cpu_s.get(name, 0.0) + time.process_time() - cpu0
             if not isinstance(delay, Delay):
                 raise TypeError("task %s yielded %r, expected v_task_delay(ticks)" % (name, delay))
             if delay.ticks >= PORT_MAX_DELAY:

@@ -34,6 +34,8 @@ before the clock moves on, so the same map and seed give the same summary and th
                    crazyflie_app/bolt, crazyflie_app/c_app.py); both read the camera through the emulated UART2
     decks          decks present (default ('bcFlow2', 'bcLoco'))
     app            the flight app under test, by registered name (default 'python'; see register_app)
+    plant          'reduced' (default: the reduced MAV model) or 'firmware' (the real firmware, docs/firmware-plant.md)
+    profile        count the CPU time of every task: the summary gets "stage_cpu_s" (host_tools.flight.stages)
 
 ``progress(t_s, phase_name)`` is called every simulated second.
 
@@ -61,6 +63,7 @@ from host_tools.flight.components import (  # noqa: F401  (the harness's public 
 from host_tools.flight.registry import (  # noqa: F401
     CAMERA_MODULES, DEFAULT_OPTIONS, Camera, app_factory, app_names, camera_factory, check_options, register_app,
     register_camera)
+from host_tools.flight.stages import stage_split
 from host_tools.flight.summary import summarize
 from host_tools.maps import PlantationMap, map_from_dict
 
@@ -105,6 +108,8 @@ class Flight:
                          WORLD_TASK_PRI)
         self.rig.app.start()
         cf.x_task_create(self.monitor.task(), "HARNESS_MONITOR", MONITOR_TASK_PRI)
+        if self.options["profile"]:
+            cf.scheduler.profile()
         cpu0 = time.process_time()
         cf.run_until(int(float(self.options["max_time_s"]) * 1000) + 1)
         self.cpu_s = time.process_time() - cpu0
@@ -147,6 +152,8 @@ def run_flight(pmap: PlantationMap, camera: Camera, *, seed: int = 0, out_dir: s
     if hasattr(camera, "report"):  # a camera that scores its own detections (vision_camera): per-frame figures
         summary["vision"] = camera.report()
     summary["cpu_s"] = round(flight.cpu_s, 2)  # not part of the reproducible record
+    if flight.options["profile"]:
+        summary["stage_cpu_s"] = stage_split(flight.rig.cf.scheduler.task_cpu_s, getattr(camera, "stage_cpu_s", None))
     if flight.out_dir is not None:
         flight.write_outputs(summary)
     return summary

@@ -17,6 +17,7 @@ DEFAULT_OPTIONS = {
     "dropout": 0.0, "hide_tree": None, "hide_s": 5.0, "hide_at_s": None, "silence": (), "garbage_rate": 0.0,
     "partial_rate": 0.0, "lockstep": True, "max_time_s": 900.0, "model": None, "params": None, "start": None,
     "mavlink": None, "decks": ("bcFlow2", "bcLoco"), "app": "python", "plant": "reduced",
+    "profile": False,
 }
 POSITIONINGS = ("uwb", "flow")  # Loco deck + Flow deck, or the Flow deck alone
 

@@ -23,6 +23,7 @@ totals (detections per frame, true/false positives, misses, pixel error) for the
 import dataclasses
 import math
 import os
+import time
 from collections.abc import Collection, Iterable, Sequence
 from pathlib import Path
 from typing import Any
@@ -166,6 +167,7 @@ class VisionCamera:
         self.runner = ModuleRunner(serial_stream=serial_stream, params=params, log_stream=log_stream or NullLog())
         self.score = DetectionScore()
         self.last_frame = None
+        self.stage_cpu_s = {"render": 0.0, "module": 0.0}  # where this camera's CPU time went
 
     def render(self, true_pose: Sequence[float], hidden: Collection[int] = frozenset()) -> Frame:
         """The frame the camera takes at ``true_pose`` (x, y, z, yaw_deg), with ``hidden`` trees removed."""
@@ -206,8 +208,12 @@ class VisionCamera:
             # on the ground: an empty frame, not rendered (the module streams from power-on, and the app
             # takes off only once it has heard the camera)
             return [foranav_serial.FRAME_START, foranav_serial.FRAME_STOP]
+        cpu0 = time.process_time()
         frame = self.render(true_pose, hidden)
+        cpu1 = time.process_time()
         lines = self._jitter(self.process(frame.image))
+        self.stage_cpu_s["render"] += cpu1 - cpu0
+        self.stage_cpu_s["module"] += time.process_time() - cpu1
         self.last_frame = frame
         self.score.add(t_ms, parse_detections(lines, self.camera.width, self.camera.height),
                        truth_in_frame(frame.trees, self.pmap.target_species))

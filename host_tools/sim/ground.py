@@ -6,6 +6,7 @@ GRASS = np.array((60, 120, 95), np.float32)
 DRY_GRASS = np.array((75, 135, 140), np.float32)
 SOIL = np.array((70, 100, 125), np.float32)
 WEED_COLOURS = ((45, 130, 80), (35, 95, 60), (90, 160, 140), (60, 80, 95))
+BAND_ROWS = 256
 
 
 def value_noise(rng: np.random.Generator, height: int, width: int, cells: int) -> np.ndarray:
@@ -52,7 +53,14 @@ def _scatter_strokes(image, rng, mpp, density_per_m2, length_m, light=1.0):
         pts = np.round(np.stack([start[shade == i], end[shade == i]], 1) * 16).astype(np.int32)
         cv2.polylines(canvas, list(pts), False, colour, 1, cv2.LINE_AA, 4)
         cv2.polylines(mask, list(pts), False, 255, 1, cv2.LINE_AA, 4)
-    # canvas is premultiplied by coverage (drawn on black); blades are 60 % opaque
-    alpha = mask.astype(np.float32)[..., None] * (0.6 / 255.0)
-    image *= (1.0 - alpha)
-    image += canvas.astype(np.float32) * (0.6 * light)
+    # canvas is premultiplied by coverage (drawn on black); blades are 60 % opaque. A band of rows at a time:
+    # the same numbers, without full-size float temporaries (a large world's ground is hundreds of MB)
+    for rows in row_bands(height):
+        alpha = mask[rows].astype(np.float32)[..., None] * (0.6 / 255.0)
+        image[rows] *= (1.0 - alpha)
+        image[rows] += canvas[rows].astype(np.float32) * (0.6 * light)
+
+
+def row_bands(height: int, rows_per_band: int = BAND_ROWS) -> list[slice]:
+    """Slices of rows covering 0..height, for element-wise work on a large image without full-size copies."""
+    return [slice(start, min(start + rows_per_band, height)) for start in range(0, height, rows_per_band)]

@@ -190,7 +190,11 @@ class World:
         photos = {i: p for i, p in photos.items() if i in drawn_ids}
         shadows = appearance.spec.crown_shadows if appearance is not None else False
         corners = _draw_map(image, pmap, seed, mpp, bounds, lighting, photos, shadows)
-        levels = _pyramid(np.clip(image + 0.5, 0, 255).astype(np.uint8))
+        finest = np.empty(image.shape, np.uint8)
+        for rows in ground.row_bands(height):
+            finest[rows] = np.clip(image[rows] + 0.5, 0, 255).astype(np.uint8)
+        del image  # the float ground is the largest array of a world: gone before the pyramid is built
+        levels = _pyramid(finest)
         return cls(pmap, levels, bounds, mpp, seed, lighting, corners,
                    {tree_id: crown.source for tree_id, (crown, _) in photos.items()})
 

@@ -9,6 +9,7 @@ traceback), so one bad flight never stops a sweep; a worker that dies is recorde
 """
 import os
 import platform
+import resource
 import time
 import traceback
 from collections.abc import Callable, Sequence
@@ -31,17 +32,24 @@ def fly_task(spec: dict) -> dict:
     small_pages_for_numpy()
 
     # process CPU: the renderer's OpenCV threads count too (a worker runs one task at a time)
-    wall0, cpu0 = time.perf_counter(), time.process_time()
+    wall0, cpu0, usage0 = time.perf_counter(), time.process_time(), resource.getrusage(resource.RUSAGE_SELF)
     result = {"index": spec["index"], "spec": spec, "worker": "%s:%d" % (platform.node(), os.getpid())}
     try:
         camera_kwargs, options = harness_inputs(spec["conditions"], spec["camera"], spec.get("fly_args", ()))
+        options["profile"] = bool(spec.get("profile"))  # the benchmark's: CPU by stage
         summary = fly(spec["map"], camera=spec["camera"], camera_kwargs=camera_kwargs, options=options,
                       seed=spec["seed"])
         summary.pop("cpu_s", None)
+        stages = summary.pop("stage_cpu_s", None)
+        if stages is not None:
+            result["stage_cpu_s"] = stages
         result.update(status="ok", summary=summary)
     except Exception:  # recorded, never raised: the sweep goes on
         result.update(status="error", traceback=traceback.format_exc())
-    result.update(cpu_s=round(time.process_time() - cpu0, 3), wall_s=round(time.perf_counter() - wall0, 3))
+    usage = resource.getrusage(resource.RUSAGE_SELF)
+    result.update(cpu_s=round(time.process_time() - cpu0, 3), wall_s=round(time.perf_counter() - wall0, 3),
+                  user_s=round(usage.ru_utime - usage0.ru_utime, 3), system_s=round(usage.ru_stime - usage0.ru_stime, 3),
+                  max_rss_mb=round(usage.ru_maxrss / 1024.0, 1))
     return result
 
 
