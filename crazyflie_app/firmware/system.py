@@ -133,6 +133,8 @@ class Crazyflie:
         self.registry.register_log_group(STATE_ESTIMATE_LOG, self.model.estimate)
         self.registry.register_log_group(SUPERVISOR_LOG, _SupervisorInfo(self.supervisor))
         self.registry.register_param_group(DECK_PARAM, self.decks)
+        for group, owner in getattr(self.stack, "log_groups", ()):  # the firmware plant's pm and motor groups
+            self.registry.register_log_group(group, owner)
         self.scheduler.x_task_create(self.stack.stabilizer_task(), "STABILIZER", STABILIZER_TASK_PRI)
 
     # -- firmware calls one service implements: FreeRTOS, commander, supervisor, UART2, log/param, console --

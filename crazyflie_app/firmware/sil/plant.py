@@ -12,6 +12,7 @@ from collections.abc import Callable, Sequence
 
 from crazyflie_app.firmware import freertos
 from crazyflie_app.firmware.commander import setpoint_t
+from crazyflie_app.firmware.logparam import LOG_FLOAT, LOG_UINT16, log_add, log_group
 from crazyflie_app.firmware.sil.stack import (CRASH_REASONS, SUPERVISOR_STATE_NAMES, WATCHDOG_STATES,
                                               FirmwarePlantConfig, FirmwareStack)
 
@@ -137,6 +138,25 @@ class FirmwareModel:
     def status(self):
         return self.stack.status
 
+    @property
+    def battery_v(self) -> float:
+        return self.stack.status.battery_v
+
+    def motor_pwm(self, index: int) -> int:
+        """The ratio the stabilizer set motor ``index`` to, 0-65535 (motorsGetRatio)."""
+        return int(round(self.stack.status.motor_ratio[index] * 65535))
+
+    m1 = property(lambda self: self.motor_pwm(0))
+    m2 = property(lambda self: self.motor_pwm(1))
+    m3 = property(lambda self: self.motor_pwm(2))
+    m4 = property(lambda self: self.motor_pwm(3))
+
+
+# the firmware's own log groups a client looks for (pm.c, motors.c), read from the plant
+PM_LOG = log_group("pm", [log_add(LOG_FLOAT, "vbat", "battery_v", "V", "battery voltage")])
+MOTOR_LOG = log_group("motor", [log_add(LOG_UINT16, name, name, "", "motor %s ratio, 0-65535" % name.upper())
+                                for name in ("m1", "m2", "m3", "m4")])
+
 
 class FirmwareFlightStack:
     """commander, supervisor, model and stabilizer task of the firmware plant, for ``system.Crazyflie``."""
@@ -148,6 +168,7 @@ class FirmwareFlightStack:
         self.commander = FirmwareCommander(self.stack, self.clock)
         self.supervisor = FirmwareSupervisor(self.stack, self.clock)
         self.model = FirmwareModel(self.stack)
+        self.log_groups = ((PM_LOG, self.model), (MOTOR_LOG, self.model))  # registered by the Crazyflie
 
     def _on_tick(self, tick: int) -> None:
         self.supervisor.observe(tick)

@@ -202,3 +202,16 @@ def test_that_nlos_ranges_are_dropped_by_the_twr_outlier_filter():
                       nlos.model.estimate.y - nlos.model.truth.y) < ESTIMATE_TOLERANCE_M
     clean.close()
     nlos.close()
+
+
+def test_that_the_battery_and_motors_are_logged_as_on_a_crazyflie():
+    # Fixture
+    cf = firmware_cf()
+    # Test
+    pilot(cf, 5000, lambda t: hover)
+    # Assert: pm.vbat sags under load, motor.m1-m4 carry the PWM the stabilizer set (hover near thrustBase)
+    vbat = cf.log_get_float(cf.log_get_var_id("pm", "vbat"))
+    motors = [cf.log_get_uint(cf.log_get_var_id("motor", "m%d" % i)) for i in range(1, 5)]
+    assert 7.0 < vbat < FirmwarePlantConfig().battery_full_v
+    assert all(25000 < m < 45000 for m in motors)
+    cf.close()
