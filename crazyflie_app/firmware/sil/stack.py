@@ -68,8 +68,9 @@ class FirmwarePlantConfig:
     reference_v: float = _setting(8.0, "V", "the voltage thrust_max_n is given at (motor speed scales with it)")
     hover_current_a: float = _setting(2.5, "A", "current at hover thrust (it grows with thrust^1.5)")
     gyro_noise_dps: float = _setting(0.2, "deg/s", "BMI088 gyro white noise per sample (1 kHz)")
-    gyro_bias_dps: float = _setting(0.05, "deg/s", "std of the gyro bias left after the driver's calibration: "
-                                    "the yaw estimate drifts by it (no magnetometer)")
+    gyro_bias_dps: float = _setting(0.01, "deg/s", "std of the gyro bias left after the driver's still calibration "
+                                    "(mean of 512 samples: 0.2 / sqrt(512) = 0.009) and in-run drift: the yaw "
+                                    "estimate drifts by it (no magnetometer)")
     acc_noise_g: float = _setting(0.004, "g", "accelerometer white noise per sample")
     acc_bias_g: float = _setting(0.002, "g", "std of the accelerometer bias")
     flow_noise_px: float = _setting(1.0, "counts", "PMW3901 noise (the sensor's units: 10x pixels)")

@@ -29,6 +29,7 @@ typedef struct {
   lpf2pData gyro_lpf[3];
   lpf2pData acc_lpf[3];
   uint32_t last_flow_tick;
+  double flow_residual[2];      /* motion below one count, kept by the sensor for the next read */
   int next_anchor;
   float twr_history[SIL_NR_OF_ANCHORS][SIL_TWR_HISTORY];
   int twr_count[SIL_NR_OF_ANCHORS];
