@@ -13,13 +13,18 @@ from crazyflie_app.firmware.commander import Commander
 from crazyflie_app.firmware.logparam import (LOG_FLOAT, LOG_UINT8, PARAM_UINT8, LogParamRegistry, log_add,
                                               log_group, param_add, param_group)
 from crazyflie_app.firmware.mav_model import MavModel, MavModelConfig
-from crazyflie_app.firmware.supervisor import SUPERVISOR_STATES, Supervisor
+from crazyflie_app.firmware.supervisor import FLYING, LOCKED, SUPERVISOR_STATES, WARNING_LEVEL_OUT, Supervisor
 from crazyflie_app.firmware.uart2 import Uart2
 
 STABILIZER_TASK_PRI = 5
 UART2_RX_TASK_PRI = 5  # stands in for the USART2 receive interrupt
 POSITION_RATE_HZ = 100  # RATE_100_HZ: the position controller's rate
 STABILIZER_PERIOD_MS = 1000 // POSITION_RATE_HZ
+# platform_bolt.c / platform_cf2.c: the name the platform service gives a client (require_arming: the Bolt)
+DEVICE_TYPE_NAMES = {True: "Crazyflie Bolt 1.1", False: "Crazyflie 2.1"}
+# supervisor.c's info bitfield (the supervisor.info log variable of the firmware, and the CRTP supervisor port)
+SUPERVISOR_INFO_CAN_BE_ARMED, SUPERVISOR_INFO_IS_ARMED, SUPERVISOR_INFO_AUTO_ARMED = 0x01, 0x02, 0x04
+SUPERVISOR_INFO_CAN_FLY, SUPERVISOR_INFO_IS_FLYING, SUPERVISOR_INFO_IS_LOCKED = 0x08, 0x10, 0x40
 
 STATE_ESTIMATE_LOG = log_group("stateEstimate", [
     log_add(LOG_FLOAT, "x", "x", "m", "estimated position, global frame"),
@@ -125,6 +130,7 @@ class Crazyflie:
     commander_set_setpoint = _Forward("commander")
     commander_relax_priority = _Forward("commander")
     commander_get_inactivity_time = _Forward("commander")
+    commander_get_active_priority = _Forward("commander")
     supervisor_is_armed = _Forward("supervisor")
     uart2_init = _Forward("uart2")
     uart2_get_data_with_timeout = _Forward("uart2")
@@ -142,6 +148,22 @@ class Crazyflie:
     def supervisor_request_arming(self, do_arm: bool) -> bool:
         """supervisorRequestArming(doArm): True when the request was taken (arming needs PRE_FLIGHT)."""
         return self.supervisor.supervisor_request_arming(do_arm, self.x_task_get_tick_count())
+
+    def supervisor_get_info_bitfield(self) -> int:
+        """supervisorGetInfoBitfield(): can be armed, is armed, auto-armed, can fly, is flying, is locked (the
+        tumbled, crashed and high-level-commander bits stay 0: this supervisor does not model them)."""
+        sup = self.supervisor
+        bits = ((SUPERVISOR_INFO_CAN_BE_ARMED if sup.supervisor_can_arm() else 0)
+                | (SUPERVISOR_INFO_IS_ARMED if sup.supervisor_is_armed() else 0)
+                | (SUPERVISOR_INFO_AUTO_ARMED if not sup.require_arming else 0)
+                | (SUPERVISOR_INFO_CAN_FLY if sup.supervisor_are_motors_allowed_to_run() else 0)
+                | (SUPERVISOR_INFO_IS_FLYING if sup.state in (FLYING, WARNING_LEVEL_OUT) else 0)
+                | (SUPERVISOR_INFO_IS_LOCKED if sup.state == LOCKED else 0))
+        return bits
+
+    def platform_config_get_device_type_name(self) -> str:
+        """platformConfigGetDeviceTypeName(): the Bolt (arming required) or the CF2 (auto-arming)."""
+        return DEVICE_TYPE_NAMES[self.supervisor.require_arming]
 
     # -- UART2 ----------------------------------------------------------------------------------------------
 
