@@ -39,16 +39,19 @@ SUPERVISOR_LOG = log_group("supervisor", [
     log_add(LOG_UINT8, "info", "state_index", "", "supervisor state: " + ", ".join(
         "%d %s" % (i, s) for i, s in enumerate(SUPERVISOR_STATES))),
 ])
-DECK_PARAM = param_group("deck", [
-    param_add(PARAM_UINT8, "bcFlow2", "bcFlow2", "", "nonzero if the Flow deck v2 is attached", True),
-    param_add(PARAM_UINT8, "bcLoco", "bcLoco", "", "nonzero if the Loco Positioning deck is attached", True),
-])
+# deck.bc*: the decks the app checks, then the presence flags of the other deck drivers a firmware build carries
+# (and cfclient reads on connect); a deck not in ``decks`` reads 0
+DECK_NAMES = {"bcFlow2": "Flow deck v2", "bcLoco": "Loco Positioning deck", "bcFlow": "Flow deck v1",
+              "bcZRanger": "Z-ranger deck", "bcZRanger2": "Z-ranger deck v2", "bcDWM1000": "Loco deck (its radio)",
+              "bcLighthouse4": "Lighthouse deck", "bcMultiranger": "Multi-ranger deck", "bcLedRing": "LED-ring deck"}
+DECK_PARAM = param_group("deck", [param_add(PARAM_UINT8, name, name, "", "nonzero if the %s is attached" % deck, True)
+                                  for name, deck in DECK_NAMES.items()])
 
 
 class _Decks:
     def __init__(self, decks):
-        self.bcFlow2 = 1 if "bcFlow2" in decks else 0
-        self.bcLoco = 1 if "bcLoco" in decks else 0
+        for name in DECK_NAMES:
+            setattr(self, name, 1 if name in decks else 0)
 
 
 class _SupervisorInfo:

@@ -10,7 +10,7 @@ One small module per port or job, as the firmware's crtp*.c files:
     console_service      port 0: the console lines (console.c)
     log_service          port 5: log TOC, blocks, data (log.c)
     param_service        port 2: param TOC, read, write, misc (param_logic.c)
-    mem_service          port 4: no memories (crtp_mem.c)
+    mem_service          port 4: the Loco deck's memory, empty: no anchors (crtp_mem.c)
     commander_service    ports 3 and 7: setpoints at COMMANDER_PRIORITY_CRTP (crtp_commander*.c)
     supervisor_service   port 9: state bits and arming (crtp_supervisor.c)
     toc, values          the TOC format both log and param use; the type codes and C conversions of values

@@ -32,11 +32,12 @@ import time
 from dataclasses import dataclass
 
 from crazyflie_app.firmware import freertos
-from crazyflie_app.firmware.crtp import link_service, mem_service
+from crazyflie_app.firmware.crtp import link_service
 from crazyflie_app.firmware.crtp.commander_service import CommanderService
 from crazyflie_app.firmware.crtp.console_service import ConsoleService
 from crazyflie_app.firmware.crtp.link import Address, DownlinkBudget, UdpLink
 from crazyflie_app.firmware.crtp.log_service import LogService
+from crazyflie_app.firmware.crtp.mem_service import MemService
 from crazyflie_app.firmware.crtp.packet import (CRTP_PORT_LINK, CRTP_PORT_LOCALIZATION, CRTP_PORT_LOG, CRTP_PORT_MEM,
                                                 CRTP_PORT_PARAM, CRTP_PORT_PLATFORM, CRTP_PORT_SETPOINT,
                                                 CRTP_PORT_SETPOINT_GENERIC, CRTP_PORT_SETPOINT_HL,
@@ -99,7 +100,7 @@ class CrtpServer:
         self.commander = CommanderService(cf)
         self.console = ConsoleService(cf.console)
         self._handlers = {
-            CRTP_PORT_PARAM: self.param.handle, CRTP_PORT_LOG: self.log.handle, CRTP_PORT_MEM: mem_service.handle,
+            CRTP_PORT_PARAM: self.param.handle, CRTP_PORT_LOG: self.log.handle, CRTP_PORT_MEM: MemService(cf.registry).handle,
             CRTP_PORT_SETPOINT: self.commander.handle, CRTP_PORT_SETPOINT_GENERIC: self.commander.handle,
             CRTP_PORT_SUPERVISOR: SupervisorService(cf).handle, CRTP_PORT_PLATFORM: PlatformService(cf).handle,
             CRTP_PORT_LINK: link_service.handle,

@@ -5,7 +5,8 @@ import struct
 import pytest
 
 from crazyflie_app.firmware import Crazyflie
-from crazyflie_app.firmware.crtp import link_service, mem_service
+from crazyflie_app.firmware.crtp import link_service
+from crazyflie_app.firmware.crtp.mem_service import MEM_TYPE_LOCO2, MemService
 from crazyflie_app.firmware.crtp.console_service import ConsoleService
 from crazyflie_app.firmware.crtp.packet import (CRTP_PORT_LINK, CRTP_PORT_MEM, CRTP_PORT_PLATFORM,
                                                 CRTP_PORT_SUPERVISOR, CrtpPacket, Unserved)
@@ -30,11 +31,18 @@ def test_that_the_platform_port_tells_version_and_device():
     assert device.data == b"\x02Crazyflie Bolt 1.1"
 
 
-def test_that_there_are_no_memories():
-    (count,) = mem_service.handle(CrtpPacket(CRTP_PORT_MEM, 0, b"\x01"), 0)
-    (read,) = mem_service.handle(CrtpPacket(CRTP_PORT_MEM, 1, bytes([0, 0, 0, 0, 0, 16])), 0)
-    assert count.data == b"\x01\x00"
-    assert read.data == bytes([0, 0, 0, 0, 0, errno.EIO])
+def test_that_the_loco_deck_memory_reads_as_no_anchors_and_nothing_else_is_there():
+    with_loco, without = MemService(Crazyflie().registry), MemService(Crazyflie(decks=("bcFlow2",)).registry)
+    (count,) = with_loco.handle(CrtpPacket(CRTP_PORT_MEM, 0, b"\x01"), 0)
+    (info,) = with_loco.handle(CrtpPacket(CRTP_PORT_MEM, 0, b"\x02\x00"), 0)
+    (read,) = with_loco.handle(CrtpPacket(CRTP_PORT_MEM, 1, bytes([0, 0, 0x10, 0, 0, 9])), 0)  # active ids
+    (write,) = with_loco.handle(CrtpPacket(CRTP_PORT_MEM, 2, bytes([0, 0, 0, 0, 0, 7])), 0)
+    assert count.data == b"\x01\x01" and info.data[2] == MEM_TYPE_LOCO2
+    assert read.data == bytes([0, 0, 0x10, 0, 0, 0]) + bytes(9)  # status 0, no anchor
+    assert write.data == bytes([0, 0, 0, 0, 0, errno.EIO])
+    (none,) = without.handle(CrtpPacket(CRTP_PORT_MEM, 0, b"\x01"), 0)
+    (outside,) = without.handle(CrtpPacket(CRTP_PORT_MEM, 1, bytes([0, 0, 0, 0, 0, 4])), 0)
+    assert none.data == b"\x01\x00" and outside.data == bytes([0, 0, 0, 0, 0, errno.EIO])
 
 
 def test_that_the_supervisor_port_reports_state_and_arms():
