@@ -35,7 +35,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="the module runs with this model file (.npz) (default: the oil palm model)")
     add_appearance_arguments(parser)
     parser.add_argument("--crtp", type=argtypes.udp_endpoint, metavar="[HOST:]PORT", default=None,
-                        help="serve CRTP on udp://HOST:PORT for cflib/cfclient (host 127.0.0.1 unless given)")
+                        help="serve CRTP on udp://HOST:PORT for cflib/cfclient (host 127.0.0.1 unless given; "
+                             "docs/crtp.md)")
 
 
 def estimated_mission_s(pmap: PlantationMap, cruise_speed: float) -> float:

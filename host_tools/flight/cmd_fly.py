@@ -96,7 +96,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--mavlink", help="also stream the telemetry live, e.g. udpout:127.0.0.1:14550")
     parser.add_argument("--crtp", type=argtypes.udp_endpoint, metavar="[HOST:]PORT", default=None,
                         help="serve CRTP on udp://HOST:PORT for cflib/cfclient (host 127.0.0.1 unless given; "
-                             "cflib scans 19850-19859)")
+                             "cflib scans 19850-19859; docs/crtp.md)")
     parser.add_argument("--model", metavar="M", default=None,
                         help="sim: the module runs with this model file (.npz), as the camera does with its "
                              "species parameter set to a model file (default: the map's target species model)")

@@ -6,6 +6,8 @@
   for a mix of what cflib asks (log and param TOC items, param reads, echoes) and of malformed datagrams;
 - udp: datagrams a second the server reads off its socket and answers while another process sends the same
   mix as fast as it can, and how many the socket dropped;
+- cflib: what stock cflib's UDP driver takes in, datagrams sent at a fixed rate (why the lockstep clock waits for
+  the downlink rather than sending as fast as it flies);
 - flight: the oracle flight of Map 1 (what ``foranav fly --map map1 --camera oracle`` flies) without
   ``--crtp``, with ``--crtp`` and no client, and with stock cflib in another process streaming a 100 Hz log
   block of stateEstimate.x/y/z: the flight process's CPU seconds and wall seconds, and the samples received.
@@ -14,6 +16,7 @@ Prints figures, asserts nothing. ``python -m host_tools.flight.crtp_bench --clie
 """
 import argparse
 import json
+import socket
 import subprocess
 import sys
 import time
@@ -31,6 +34,8 @@ UDP_DATAGRAMS = 200_000
 CLIENT_BLOCK_MS = 10
 CLIENT_QUIET_S = 2.0  # no sample for this long: the flight is over
 CLIENT_START_TIMEOUT_S = 30.0
+INTAKE_RATES = (1000, 5000, 20000, 50000)  # datagrams/s sent to cflib's UDP driver, for one second each
+INTAKE_SETTLE_S = 0.5
 
 
 def request_mix(count: int) -> list[bytes]:
@@ -83,6 +88,36 @@ def measure_udp(count: int = UDP_DATAGRAMS) -> dict:
     handled = server.stats.datagrams
     return {"sent": count, "handled": handled, "dropped_by_socket": count - handled, "wall_s": round(wall, 3),
             "per_s": int(handled / wall)}
+
+
+def measure_cflib_intake() -> list[dict]:
+    """Datagrams received by cflib's UdpDriver (its receive thread and queue) out of one second's worth sent at
+    each rate (from this process: the sender shares the interpreter with cflib's thread, as a flight would)."""
+    from cflib.crtp.crtpstack import CRTPPacket
+    from cflib.crtp.udpdriver import UdpDriver
+
+    rows = []
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as sender:
+        sender.bind(("127.0.0.1", 0))
+        driver = UdpDriver()
+        driver.connect("udp://127.0.0.1:%d" % sender.getsockname()[1], None, lambda message: None)
+        try:
+            driver.send_packet(CRTPPacket(0x52, bytes(20)))  # tells the sender where the driver listens
+            _, address = sender.recvfrom(64)
+            for rate in INTAKE_RATES:
+                started = time.perf_counter()
+                for i in range(rate):
+                    sender.sendto(b"\x52" + i.to_bytes(4, "little") + bytes(20), address)
+                    while time.perf_counter() < started + (i + 1) / rate:
+                        pass
+                time.sleep(INTAKE_SETTLE_S)
+                received = 0
+                while driver.receive_packet(0) is not None:
+                    received += 1
+                rows.append({"rate_per_s": rate, "sent": rate, "received": received})
+        finally:
+            driver.close()
+    return rows
 
 
 def _flight(client: bool, crtp: bool) -> dict:
@@ -139,7 +174,8 @@ def client_main(uri: str) -> int:
 
 
 def run(args: argparse.Namespace) -> int:
-    results = {"dispatch": measure_dispatch(), "udp": measure_udp(), "flight": measure_flights()}
+    results = {"dispatch": measure_dispatch(), "udp": measure_udp(), "cflib": measure_cflib_intake(),
+               "flight": measure_flights()}
     if getattr(args, "json", False):
         print(json.dumps({"crtp": results}, indent=2))
         return 0
@@ -147,6 +183,8 @@ def run(args: argparse.Namespace) -> int:
     print("dispatch  %d requests/s (%d in %.2f s, no socket)" % (d["per_s"], d["datagrams"], d["wall_s"]))
     print("udp       %d datagrams/s handled (%d of %d sent; %d dropped by the socket)" % (
         u["per_s"], u["handled"], u["sent"], u["dropped_by_socket"]))
+    print("cflib     " + "; ".join("%d of %d received at %d/s" % (r["received"], r["sent"], r["rate_per_s"])
+                                   for r in results["cflib"]))
     print("%-34s %8s %8s %12s %9s" % ("flight (map1, oracle)", "CPU (s)", "wall (s)", "mission (s)", "samples"))
     for row in results["flight"]:
         label = "with --crtp, cflib 100 Hz block" if row["client"] else (

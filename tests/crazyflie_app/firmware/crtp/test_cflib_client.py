@@ -1,5 +1,5 @@
 """Stock cflib against a running flight: connect, TOCs and their cache, log blocks, console, scan, param write,
-disconnect and reconnect mid-flight.
+disconnect and reconnect mid-flight; and (-m slow) a --realtime flight.
 
 One scripted flight (``watched``) serves every observing test: a first session connects with an empty TOC
 cache, streams a 10 ms block (the estimate) and a 100 ms block (the estimate and app variables), scans for
@@ -8,13 +8,16 @@ streams the 10 ms block again and leaves at 30 s. The flight is map 1 with the o
 cut at 40 s; its tlog is compared with the same flight flown without any server.
 """
 import math
+import socket
 import struct
+import threading
 
 import cflib.crtp
 import pytest
 from pymavlink import mavutil
 
 from host_tools.flight.harness import Flight
+from host_tools.flight.realtime import run_realtime
 from host_tools.flight.registry import camera_factory, check_options
 from host_tools.flight.components import FlightRig
 from host_tools.maps import load_map
@@ -29,6 +32,9 @@ APP_VARIABLES = ("app.phase", "app.targetId", "app.errU")
 TLOG_PERIOD_MS = 100
 ALTITUDE_WRITTEN_M = 0.9
 ALTITUDE_TOLERANCE_M = 0.05
+REALTIME_SPEED = 8.0  # as tests/host_tools/flight/test_realtime.py: the camera process keeps up
+REALTIME_FLIGHT_S = 30.0
+CONNECTED_BY_MS = 1000
 
 
 def _float32(value: float) -> float:
@@ -188,3 +194,41 @@ def test_that_a_param_write_changes_the_flight(flight_process, tmp_path):
     cruise_heights = [values[RECORDED.index("stateEstimate.z")] for tick, values in record.items() if tick >= 20000]
     assert cruise_heights
     assert all(abs(z - ALTITUDE_WRITTEN_M) < ALTITUDE_TOLERANCE_M for z in cruise_heights)
+
+
+def _port_free(port: int) -> bool:
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
+        try:
+            probe.bind(("127.0.0.1", port))
+        except OSError:
+            return False
+        return True
+
+
+@pytest.mark.slow
+def test_that_stock_cflib_watches_a_realtime_flight(tmp_path):
+    # Fixture: a --realtime flight (camera process, wall clock) serving CRTP, flown in a thread
+    port = free_scan_port()
+    result = {}
+    flight = threading.Thread(target=lambda: result.update(run_realtime(
+        load_map("map1"), speed=REALTIME_SPEED,
+        options={"max_time_s": REALTIME_FLIGHT_S, "crtp": "127.0.0.1:%d" % port})))
+    flight.start()
+    wait_for(lambda: not _port_free(port), timeout_s=60, what="the server's socket")
+    session = Session("udp://127.0.0.1:%d" % port, tmp_path / "toc_cache").wait(timeout_s=120)
+    heights = session.start_block("z", SLOW_MS, ("stateEstimate.z",))
+    wait_for(lambda: heights and max(data["stateEstimate.z"] for _, data in heights) > 1.0, timeout_s=60,
+             what="the climb")
+    session.close()
+    flight.join(120)
+    # Assert: a sample every 100 ms of flight time, and the flight went on to its time limit
+    stamps = [ts for ts, _ in heights]
+    assert all(b - a == SLOW_MS for a, b in zip(stamps, stamps[1:]))
+    assert result["realtime"]["speed"] == REALTIME_SPEED and not result["completed"]
+
+
+def test_that_the_clock_holds_while_cflib_connects(watched):
+    # the first session's ~150 requests (TOCs, every param, two blocks) took well under a second of flight time:
+    # without the hold, each round trip would let the oracle flight run on by ~10 ms or more
+    assert watched["fast"][0][0][0] < CONNECTED_BY_MS
+    assert watched["result"]["stats"]["held_s"] > 0
