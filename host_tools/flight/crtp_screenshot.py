@@ -1,11 +1,12 @@
 """docs/img/crtp_cfclient_plotter.png: stock cfclient under Xvfb, connected to a --realtime flight over CRTP,
 its plotter showing the climb (``make crtp-screenshot``; docs/crtp.md).
 
-Needs the Debian packages xvfb, x11-utils, xdotool and imagemagick (and Qt's xcb libraries, libxcb-cursor0 among them) and
-cfclient from PyPI in its own venv (``build/cfclient-venv``, made by the make target: cfclient pins PyQt6 and
-numpy versions the project's venv does not need). The steps are what a user does by hand: start the flight,
-start cfclient with a log configuration of the estimate (``stateEstimate.x/y/z`` every 100 ms; the plotter
-starts the first configuration it is given), Scan, Connect, watch the climb; then one screenshot of the screen.
+Needs the Debian packages xvfb, x11-utils, xdotool and imagemagick (and Qt's xcb libraries, libxcb-cursor0 among
+them) and cfclient from PyPI in its own venv (``build/cfclient-venv``, made by the make target: cfclient pins
+PyQt6 and numpy versions the project's venv does not need). The steps are what a user does by hand, clicked by
+xdotool: start the flight (``--realtime --speed 0.5``), start cfclient with a log configuration of the estimate
+(``stateEstimate.x/y/z`` every 100 ms) in its configuration folder, Scan, Connect, choose the configuration in the
+plotter (which starts the block), watch the climb; then one screenshot of the screen.
 
     python -m host_tools.flight.crtp_screenshot --cfclient build/cfclient-venv/bin/cfclient --out PNG
 """

@@ -100,7 +100,8 @@ class CrtpServer:
         self.commander = CommanderService(cf)
         self.console = ConsoleService(cf.console)
         self._handlers = {
-            CRTP_PORT_PARAM: self.param.handle, CRTP_PORT_LOG: self.log.handle, CRTP_PORT_MEM: MemService(cf.registry).handle,
+            CRTP_PORT_PARAM: self.param.handle, CRTP_PORT_LOG: self.log.handle,
+            CRTP_PORT_MEM: MemService(cf.registry).handle,
             CRTP_PORT_SETPOINT: self.commander.handle, CRTP_PORT_SETPOINT_GENERIC: self.commander.handle,
             CRTP_PORT_SUPERVISOR: SupervisorService(cf).handle, CRTP_PORT_PLATFORM: PlatformService(cf).handle,
             CRTP_PORT_LINK: link_service.handle,

@@ -86,10 +86,11 @@ def watched(tmp_path_factory):
                        options={"max_time_s": MAX_TIME_S})
     reference.run()
     reference.close()
-    return {"child": child, "result": result, "tocs": tocs, "record": child.record(), "uri": child.uri, "scanned": scanned,
-            "sessions": (first, second), "fast": (fast1, fast2), "slow": slow,
-            "tlog": (tmp / "flight" / "flight.tlog").read_bytes(),
-            "reference_tlog": (tmp / "reference" / "flight.tlog").read_bytes(), "tlog_path": tmp / "flight" / "flight.tlog"}
+    tlog_path = tmp / "flight" / "flight.tlog"
+    return {"child": child, "result": result, "tocs": tocs, "record": child.record(), "uri": child.uri,
+            "scanned": scanned, "sessions": (first, second), "fast": (fast1, fast2), "slow": slow,
+            "tlog": tlog_path.read_bytes(), "tlog_path": tlog_path,
+            "reference_tlog": (tmp / "reference" / "flight.tlog").read_bytes()}
 
 
 def test_that_the_tocs_cflib_loads_are_the_registry_of_the_flight(watched):
