@@ -40,17 +40,22 @@ MEMORY_GROWTH_MAX_BYTES = 64 * 1024
 DEFAULT_WINDOW = (40_000, 70_000)  # tracemalloc slows the interpreter a few times: a window in the default suite
 CRTP_PACKAGE = str(Path(packet.__file__).parent)
 KNOWN_COMMAND_PORTS = (0x02, 0x03, 0x04, 0x05, 0x07, 0x09, 0x0D, 0x0F)
-PARAM_SIZES = {}  # filled from the flight's registry: param id -> (value size, writable)
 
 
-def _is_command(datagram: bytes) -> bool:
+def _writable_sizes(registry) -> dict[int, int]:
+    """param id -> value size, for the params a client may write."""
+    return {index: param_size(entry.type) for index, (_, entry) in enumerate(registry.param_entries())
+            if not entry.read_only}
+
+
+def _is_command(datagram: bytes, writable: dict[int, int]) -> bool:
     """A well-formed command that changes the flight on purpose (see the module docstring)."""
     if not 2 <= len(datagram) <= 31:
         return False
     port, channel, data = datagram[0] >> 4, datagram[0] & 0x03, datagram[1:]
     if port == 0x02 and channel == 2 and len(data) >= 2:  # param write to a real, writable param
-        size, writable = PARAM_SIZES.get(data[0] | data[1] << 8, (None, False))
-        return writable and len(data) == 2 + size
+        size = writable.get(data[0] | data[1] << 8)
+        return size is not None and len(data) == 2 + size
     if port == 0x02 and channel == 3 and data[0] == 0:  # set by name: any that parses
         return data.count(0) >= 3
     if port == 0x09 and channel == 1 and data[0] == 0x01 and len(data) >= 2:  # arm / disarm
@@ -84,7 +89,7 @@ def _structured(rng: random.Random) -> bytes:
     return bytes([port << 4 | rng.choice((0, 0x0C)) | channel]) + data
 
 
-def fuzz_datagrams(rng: random.Random, count: int):
+def fuzz_datagrams(rng: random.Random, count: int, writable: dict[int, int]):
     """``count`` datagrams: a third uniformly random (length 0..40), the rest structured; no commands."""
     made = 0
     while made < count:
@@ -92,7 +97,7 @@ def fuzz_datagrams(rng: random.Random, count: int):
             datagram = bytes(rng.randrange(256) for _ in range(rng.randrange(41)))
         else:
             datagram = _structured(rng)
-        if not _is_command(datagram):
+        if not _is_command(datagram, writable):
             made += 1
             yield datagram
 
@@ -121,8 +126,7 @@ def _fuzz_a_flight(tmp_path, datagrams: int, window: tuple[int, int], cruise_mps
     flight = Flight(pmap, camera_factory("oracle")(pmap, seed=0), seed=0, out_dir=tmp_path / "flight",
                     options={"crtp": "127.0.0.1:0", "params": {"app.cruiseSpeed": cruise_mps}})
     server = flight.crtp
-    for index, (name, entry) in enumerate(flight.rig.cf.registry.param_entries()):
-        PARAM_SIZES[index] = (param_size(entry.type), not entry.read_only)
+    writable = _writable_sizes(flight.rig.cf.registry)
     senders = [socket.socket(socket.AF_INET, socket.SOCK_DGRAM) for _ in range(SENDERS)]
     rng = random.Random(FUZZ_SEED)
     thread = _FlightThread(flight)
@@ -131,7 +135,7 @@ def _fuzz_a_flight(tmp_path, datagrams: int, window: tuple[int, int], cruise_mps
         thread.start()
         wait_for(lambda: flight.rig.now() > 6000, what="take-off")  # the app holds the commander
         sent = 0
-        for datagram in fuzz_datagrams(rng, datagrams):
+        for datagram in fuzz_datagrams(rng, datagrams, writable):
             try:
                 rng.choice(senders).sendto(datagram, server.address)
             except OSError:
@@ -190,13 +194,14 @@ def test_that_no_short_datagram_makes_the_server_raise():
     cf = Crazyflie()
     server = CrtpServer(cf, "127.0.0.1", 0)
     rng = random.Random(FUZZ_SEED)
+    writable = _writable_sizes(cf.registry)
     handled = 0
     try:
         for header in range(256):
             for length in range(4):
                 for _ in range(3 if length else 1):
                     datagram = bytes([header]) + bytes(rng.randrange(256) for _ in range(length))
-                    if not _is_command(datagram):
+                    if not _is_command(datagram, writable):
                         server.handle_datagram(datagram, ("127.0.0.1", 9), 0)
                         handled += 1
     finally:
