@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: setup test demo bench paper-tests deploy clean camera-runtime docs capp capp-asan bolt firmware-sil
+.PHONY: setup test demo bench paper-tests deploy clean camera-runtime docs capp capp-asan bolt firmware-sil crtp-screenshot
 
 setup: $(STAMP)
 
@@ -87,6 +87,17 @@ bench: $(STAMP)
 
 paper-tests: $(STAMP)
 	$(BIN)/foranav paper-tests --out runs/paper-tests
+
+# docs/img/crtp_cfclient_plotter.png (docs/crtp.md): stock cfclient under Xvfb, connected to a --realtime flight.
+# Needs apt packages xvfb x11-utils xdotool imagemagick libxcb-cursor0; cfclient goes in its own venv (it pins
+# PyQt6 and numpy versions the project does not need).
+CFCLIENT_VENV := build/cfclient-venv
+CFCLIENT_VERSION := 2026.8.1
+crtp-screenshot: $(STAMP)
+	test -x $(CFCLIENT_VENV)/bin/cfclient || { $(PYTHON) -m venv $(CFCLIENT_VENV) && \
+		$(CFCLIENT_VENV)/bin/python -m pip install --quiet cfclient==$(CFCLIENT_VERSION); }
+	$(BIN)/python -m host_tools.flight.crtp_screenshot --cfclient $(CFCLIENT_VENV)/bin/cfclient \
+		--out docs/img/crtp_cfclient_plotter.png
 
 deploy: $(STAMP)
 	@test -n "$(SD)" || { echo "usage: make deploy SD=/path/to/JEVOIS [DEPLOY_FLAGS=--headless]"; exit 2; }

@@ -15,6 +15,7 @@ from typing import Callable
 
 # numpy.random.RandomState (camera code, synthetic data) takes seeds 0 .. 2**32 - 1
 SEED_MAX = 2 ** 32 - 1
+DEFAULT_UDP_HOST = "127.0.0.1"  # a served port is local unless a host is given
 
 
 def _number(text: str, kind: type) -> float:
@@ -81,6 +82,29 @@ def seed(text: str) -> int:
     if not 0 <= value <= SEED_MAX:
         raise argparse.ArgumentTypeError("must be an integer from 0 to %d, got %r" % (SEED_MAX, text))
     return value
+
+
+def parse_udp_endpoint(text: str, low_port: int = 1) -> tuple[str, int]:
+    """'[HOST:]PORT' -> (host, port), host 127.0.0.1 when absent; ValueError saying what is wrong."""
+    host, _, port_text = str(text).strip().rpartition(":")
+    host = host or DEFAULT_UDP_HOST
+    try:
+        port = int(port_text)
+    except ValueError:
+        raise ValueError("expected [HOST:]PORT, got %r" % text)
+    if not low_port <= port <= 65535:
+        raise ValueError("port must be in [%d, 65535], got %r" % (low_port, text))
+    if any(c.isspace() for c in host) or ":" in host:
+        raise ValueError("expected [HOST:]PORT with an IPv4 host or name, got %r" % text)
+    return host, port
+
+
+def udp_endpoint(text: str) -> str:
+    """'[HOST:]PORT' (a UDP port to serve; host 127.0.0.1 when absent), normalised to 'HOST:PORT'."""
+    try:
+        return "%s:%d" % parse_udp_endpoint(text)
+    except ValueError as err:
+        raise argparse.ArgumentTypeError(str(err))
 
 
 class Once(argparse.Action):

@@ -1,4 +1,4 @@
-"""Benchmarks that print figures: foranav bench {sim,detector,flight,sweep,recall} [--json].
+"""Benchmarks that print figures: foranav bench {sim,detector,flight,sweep,recall,crtp} [--json].
 
 sim:      rendered 352x288 camera frames per second on one core (plantation simulator); with --crowns CSV ...
           also over photo crowns, next to the procedural figures.
@@ -11,6 +11,9 @@ sweep:    flights per CPU-second and the 1 -> 2 Dask worker speed-up (--camera s
 recall:   how often the camera module sees the crown under the MAV from straight above: isolated, touching
           one or two neighbours, small beside a larger one, centred and off-centre (--model, --count frames
           per case, --seed).
+crtp:     datagrams per second the CRTP server handles (dispatch alone, and over UDP from another process),
+          and the CPU and wall seconds of the Map 1 oracle flight without --crtp, with it, and with stock cflib
+          streaming a 100 Hz log block.
 """
 import argparse
 import importlib
@@ -25,6 +28,7 @@ TARGETS = {
     "flight": "host_tools.flight.bench",
     "sweep": "host_tools.sweep.bench",
     "recall": "host_tools.detection.recall_bench",
+    "crtp": "host_tools.flight.crtp_bench",
 }
 
 

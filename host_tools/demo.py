@@ -4,6 +4,7 @@ navigation app reads them with pyserial on the emulated firmware and flies to ev
 
 Shows a progress bar while it flies, then a short summary table, and says where the trajectory plot and the
 MAVLink telemetry log (open it in QGroundControl or MAVExplorer) were written (default runs/demo/).
+With --crtp [HOST:]PORT the emulated Crazyflie also serves CRTP there for cflib and cfclient (docs/crtp.md).
 """
 import argparse
 import math
@@ -14,7 +15,7 @@ from pathlib import Path
 from crazyflie_app.navigation_core import NavigationParams
 from host_tools import argtypes, fileio
 from host_tools.flight.cmd_fly import add_plant_argument, print_table
-from host_tools.flight.components import plant_config
+from host_tools.flight.components import check_crtp_endpoint, plant_config
 from host_tools.flight.harness import run_flight
 from host_tools.flight.vision_camera import VisionCamera, model_option
 from host_tools.maps import PlantationMap, load_map
@@ -34,6 +35,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="the module runs with this model file (.npz) (default: the oil palm model)")
     add_appearance_arguments(parser)
     add_plant_argument(parser)
+    parser.add_argument("--crtp", type=argtypes.udp_endpoint, metavar="[HOST:]PORT", default=None,
+                        help="serve CRTP on udp://HOST:PORT for cflib/cfclient (host 127.0.0.1 unless given; "
+                             "docs/crtp.md)")
 
 
 def estimated_mission_s(pmap: PlantationMap, cruise_speed: float) -> float:
@@ -76,6 +80,8 @@ def run(args: argparse.Namespace) -> int:
 
     out = fileio.check_output_dir(Path(args.out))
     plant_config(args.plant, None)  # the firmware plant is built, or one line saying how
+    if args.crtp:
+        check_crtp_endpoint(args.crtp)
     pmap = load_map(DEMO_MAP)
     spec, _ = appearance_from_args(args, {t.species for t in pmap.trees}, "map %s" % DEMO_MAP)
     model = model_option(args.model) if args.model is not None else None
@@ -85,8 +91,13 @@ def run(args: argparse.Namespace) -> int:
     camera = VisionCamera(pmap, seed=args.seed, appearance=None if spec.default else spec, model=model)
     if photo_summary(camera.world):
         print("  " + photo_summary(camera.world))
+    if args.crtp:
+        print("  CRTP: the Crazyflie answers on udp://%s (cflib, cfclient)" % args.crtp)
     bar = _Bar(estimated_mission_s(pmap, NavigationParams().cruise_speed), sys.stdout)
-    summary = run_flight(pmap, camera, seed=args.seed, out_dir=out, progress=bar, options={"plant": args.plant})
+    options = {"plant": args.plant}
+    if args.crtp:
+        options["crtp"] = args.crtp
+    summary = run_flight(pmap, camera, seed=args.seed, out_dir=out, progress=bar, options=options)
     bar.finish(summary["mission_time_s"])
     summary.pop("cpu_s", None)
     print()

@@ -37,7 +37,8 @@ stabilizer loop + PID position ctrl    ``system.Crazyflie._stabilizer_task`` + `
 =====================================  ================================================================
 
 What is not emulated: the attitude/rate loops and motor mixing (replaced by a closed-loop velocity model),
-CRTP/radio, the high-level commander, the arming spin-up check, and FreeRTOS time slicing between tasks of equal priority.
+the radio itself (CRTP is served over UDP instead, as cflib's udp:// link: ``crtp``, docs/crtp.md), the
+high-level commander, the arming spin-up check, and FreeRTOS time slicing between tasks of equal priority.
 """
 from crazyflie_app.firmware.commander import (COMMANDER_PRIORITY_CRTP, COMMANDER_PRIORITY_DISABLE,  # noqa: F401
                                               COMMANDER_PRIORITY_EXTRX, COMMANDER_PRIORITY_HIGHLEVEL,

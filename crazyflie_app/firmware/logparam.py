@@ -108,6 +108,7 @@ class LogParamRegistry:
         self._params = []
         self._log_index = {}
         self._param_index = {}
+        self._param_defaults = []  # each param's value when it was registered (the firmware's .data image)
 
     # -- registration (what the LOG_GROUP/PARAM_GROUP macros do at link time) -----------------------------
 
@@ -116,6 +117,7 @@ class LogParamRegistry:
 
     def register_param_group(self, table: Group, owner: object) -> None:
         self._register(table, owner, self._params, self._param_index)
+        self._param_defaults.extend(v.get() for v in self._params[len(self._param_defaults):])
 
     @staticmethod
     def _register(table, owner, variables, index):
@@ -184,6 +186,12 @@ class LogParamRegistry:
         if v.entry.type != PARAM_FLOAT:
             raise FirmwareAssertError("paramGetFloat: %s is a %s" % (v.full_name, v.entry.type))
         return float(v.get())
+
+    def param_get_default(self, var_id: ParamVarId) -> float | int:
+        """The param's value at registration: what the firmware's default-value query answers (the value
+        in the image's initialised data, before anything set it)."""
+        self._param_variable(var_id, "paramGetDefault")  # asserts the id is valid
+        return self._param_defaults[var_id.id]
 
     def _param_writable(self, var_id, caller):
         v = self._param_variable(var_id, caller)

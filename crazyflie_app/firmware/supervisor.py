@@ -38,6 +38,9 @@ LANDED = "LANDED"
 LOCKED = "LOCKED"
 READY_TO_FLY = "READY_TO_FLY"
 SUPERVISOR_STATES = (PRE_FLIGHT, FLYING, WARNING_LEVEL_OUT, LANDED, LOCKED, READY_TO_FLY)
+# supervisor.c's info bitfield (the CRTP supervisor port's answer; supervisorGetInfoBitfield)
+SUPERVISOR_INFO_CAN_BE_ARMED, SUPERVISOR_INFO_IS_ARMED, SUPERVISOR_INFO_AUTO_ARMED = 0x01, 0x02, 0x04
+SUPERVISOR_INFO_CAN_FLY, SUPERVISOR_INFO_IS_FLYING, SUPERVISOR_INFO_IS_LOCKED = 0x08, 0x10, 0x40
 
 
 class Supervisor:
@@ -168,6 +171,16 @@ class Supervisor:
             candidates.append(self._landed_since + LANDING_TIMEOUT_MS + 1)
         later = [c for c in candidates if c > now]
         return min(later) if later else None
+
+    def supervisor_get_info_bitfield(self) -> int:
+        """supervisorGetInfoBitfield(): can be armed, is armed, auto-armed, can fly, is flying, is locked (the
+        tumbled, crashed and high-level-commander bits stay 0: this supervisor does not model them)."""
+        return ((SUPERVISOR_INFO_CAN_BE_ARMED if self.supervisor_can_arm() else 0)
+                | (SUPERVISOR_INFO_IS_ARMED if self.supervisor_is_armed() else 0)
+                | (SUPERVISOR_INFO_AUTO_ARMED if not self.require_arming else 0)
+                | (SUPERVISOR_INFO_CAN_FLY if self.supervisor_are_motors_allowed_to_run() else 0)
+                | (SUPERVISOR_INFO_IS_FLYING if self.state in (FLYING, WARNING_LEVEL_OUT) else 0)
+                | (SUPERVISOR_INFO_IS_LOCKED if self.state == LOCKED else 0))
 
     def supervisor_can_fly(self) -> bool:
         return self.state != LOCKED

@@ -28,6 +28,8 @@ UART2_RX_TASK_PRI = 5  # stands in for the USART2 receive interrupt
 POSITION_RATE_HZ = 100  # RATE_100_HZ: the position controller's rate
 STABILIZER_PERIOD_MS = 1000 // POSITION_RATE_HZ
 PLANTS = ("reduced", "firmware")  # the reduced model (default) or the real firmware over a rigid body
+# platform_bolt.c / platform_cf2.c: the name the platform service gives a client (require_arming: the Bolt)
+DEVICE_TYPE_NAMES = {True: "Crazyflie Bolt 1.1", False: "Crazyflie 2.1"}
 
 STATE_ESTIMATE_LOG = log_group("stateEstimate", [
     log_add(LOG_FLOAT, "x", "x", "m", "estimated position, global frame"),
@@ -44,16 +46,19 @@ SUPERVISOR_LOG = log_group("supervisor", [
     log_add(LOG_UINT8, "info", "state_index", "", "supervisor state: " + ", ".join(
         "%d %s" % (i, s) for i, s in enumerate(SUPERVISOR_STATES)) + " (firmware plant: supervisorState_t)"),
 ])
-DECK_PARAM = param_group("deck", [
-    param_add(PARAM_UINT8, "bcFlow2", "bcFlow2", "", "nonzero if the Flow deck v2 is attached", True),
-    param_add(PARAM_UINT8, "bcLoco", "bcLoco", "", "nonzero if the Loco Positioning deck is attached", True),
-])
+# deck.bc*: the decks the app checks, then the presence flags of the other deck drivers a firmware build carries
+# (and cfclient reads on connect); a deck not in ``decks`` reads 0
+DECK_NAMES = {"bcFlow2": "Flow deck v2", "bcLoco": "Loco Positioning deck", "bcFlow": "Flow deck v1",
+              "bcZRanger": "Z-ranger deck", "bcZRanger2": "Z-ranger deck v2", "bcDWM1000": "Loco deck (its radio)",
+              "bcLighthouse4": "Lighthouse deck", "bcMultiranger": "Multi-ranger deck", "bcLedRing": "LED-ring deck"}
+DECK_PARAM = param_group("deck", [param_add(PARAM_UINT8, name, name, "", "nonzero if the %s is attached" % deck, True)
+                                  for name, deck in DECK_NAMES.items()])
 
 
 class _Decks:
     def __init__(self, decks):
-        self.bcFlow2 = 1 if "bcFlow2" in decks else 0
-        self.bcLoco = 1 if "bcLoco" in decks else 0
+        for name in DECK_NAMES:
+            setattr(self, name, 1 if name in decks else 0)
 
 
 class _SupervisorInfo:
@@ -145,6 +150,7 @@ class Crazyflie:
     commander_set_setpoint = _Forward("commander")
     commander_relax_priority = _Forward("commander")
     commander_get_inactivity_time = _Forward("commander")
+    commander_get_active_priority = _Forward("commander")
     supervisor_is_armed = _Forward("supervisor")
     uart2_init = _Forward("uart2")
     uart2_get_data_with_timeout = _Forward("uart2")
@@ -162,6 +168,15 @@ class Crazyflie:
     def supervisor_request_arming(self, do_arm: bool) -> bool:
         """supervisorRequestArming(doArm): True when the request was taken (arming needs PRE_FLIGHT)."""
         return self.supervisor.supervisor_request_arming(do_arm, self.x_task_get_tick_count())
+
+    def supervisor_get_info_bitfield(self) -> int:
+        """supervisorGetInfoBitfield(): can be armed, is armed, auto-armed, can fly, is flying, is locked (the
+        firmware plant: its supervisor.c's own bits)."""
+        return self.supervisor.supervisor_get_info_bitfield()
+
+    def platform_config_get_device_type_name(self) -> str:
+        """platformConfigGetDeviceTypeName(): the Bolt (arming required) or the CF2 (auto-arming)."""
+        return DEVICE_TYPE_NAMES[self.supervisor.require_arming]
 
     # -- UART2 ----------------------------------------------------------------------------------------------
 

@@ -14,6 +14,10 @@ times --speed; --kill-camera-at S kills the camera process at S simulated second
 estimator (built from the firmware source by `make firmware-sil`) over a rigid-body quadrotor; the app reads
 the Kalman filter's estimate, never the truth. --plant reduced (the default) is the reduced MAV model.
 
+--crtp [HOST:]PORT: the emulated Crazyflie serves CRTP on udp://HOST:PORT (host 127.0.0.1 unless given), so
+cflib and cfclient connect to the flight as to a Crazyflie: log and param TOCs, log blocks, params, console,
+arming (docs/crtp.md). Lockstep without a client: the same summary and tlog bytes as without --crtp.
+
 Prints the flight summary (a short table, or the JSON object with --json) and writes flight.tlog (MAVLink 2),
 trajectory.png and summary.json into --out (default runs/fly-<map>-seed<N>/). Exit status 0 when the flight
 completed, 1 when it did not (crash (CRASHED: tumbled or hit the ground faster than 1 m/s), watchdog lock, time limit, camera never heard so never took off, camera
@@ -28,6 +32,7 @@ Examples:
   foranav fly --map map1 --plant firmware --positioning flow
   foranav fly --map map2 --camera oracle --dropout 0.3 --json
   foranav fly --map map3 --camera oracle --hide-tree 6 --hide-s 5 --mavlink udpout:127.0.0.1:14550
+  foranav fly --map map1 --realtime --crtp 19850     (then connect cfclient to udp://127.0.0.1:19850)
   foranav fly --map map1 --crowns ../shared/data/real/oilpalm_gearth_detectree2/boxes.csv --model real.npz
 """
 import argparse
@@ -41,6 +46,7 @@ from typing import TextIO
 from host_tools import argtypes, fileio
 from host_tools.errors import ForaNavError
 from host_tools.flight import camera_factory, run_flight
+from host_tools.flight.components import check_crtp_endpoint
 from host_tools.flight.realtime import run_realtime
 from host_tools.flight.registry import PLANTS, POSITIONINGS, plant_model_options
 from host_tools.flight.vision_camera import model_option
@@ -96,6 +102,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--wind", type=argtypes.float_range(0.0, 20.0), default=0.0,
                         help="wind gust acceleration std (m/s^2)")
     parser.add_argument("--mavlink", help="also stream the telemetry live, e.g. udpout:127.0.0.1:14550")
+    parser.add_argument("--crtp", type=argtypes.udp_endpoint, metavar="[HOST:]PORT", default=None,
+                        help="serve CRTP on udp://HOST:PORT for cflib/cfclient (host 127.0.0.1 unless given; "
+                             "cflib scans 19850-19859; docs/crtp.md)")
     parser.add_argument("--model", metavar="M", default=None,
                         help="sim: the module runs with this model file (.npz), as the camera does with its "
                              "species parameter set to a model file (default: the map's target species model)")
@@ -124,6 +133,8 @@ def flight_options(args: argparse.Namespace) -> dict:
         options.update(hide_tree=args.hide_tree, hide_s=args.hide_s)
     if args.mavlink:
         options["mavlink"] = args.mavlink
+    if args.crtp:
+        options["crtp"] = args.crtp
     if args.cam_offset is not None:
         options["params"] = {"app.camOffsetX": args.cam_offset[0], "app.camOffsetY": args.cam_offset[1]}
     return options
@@ -209,6 +220,8 @@ def run(args: argparse.Namespace) -> int:
         raise ForaNavError("--realtime: only with --camera sim")
     out = Path(args.out) if args.out else Path("runs") / ("fly-%s-seed%d" % (Path(args.map).stem, args.seed))
     fileio.check_output_dir(out, "--out")
+    if args.crtp:
+        check_crtp_endpoint(args.crtp)
     pmap = load_map(args.map)
     if args.hide_tree is not None and args.hide_tree not in {tree.id for tree in pmap.trees}:
         raise ForaNavError("--hide-tree: map %s has no tree %d (its trees: %s)" % (
@@ -225,6 +238,8 @@ def run(args: argparse.Namespace) -> int:
         except ValueError as err:
             raise ForaNavError("camera: %s" % err)
 
+    if args.crtp:
+        print("  CRTP: the Crazyflie answers on udp://%s (cflib, cfclient)" % args.crtp, file=sys.stderr)
     last_print = [time.monotonic()]
 
     def progress(t_s, phase):

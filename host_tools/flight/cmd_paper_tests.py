@@ -14,6 +14,7 @@ Examples:
   foranav paper-tests --crowns ../shared/data/real/oilpalm_gearth_detectree2/boxes.csv --model real.npz
   foranav paper-tests --app c
   foranav paper-tests --plant firmware
+  foranav paper-tests --tests 1,4 --crtp 19850     (Test 1 on udp://127.0.0.1:19850, Test 4 on :19851)
 """
 import argparse
 import json
@@ -25,7 +26,7 @@ from host_tools import argtypes, fileio
 from host_tools.errors import ForaNavError
 from host_tools.flight import paper_tests
 from host_tools.flight.cmd_fly import add_plant_argument
-from host_tools.flight.components import plant_config
+from host_tools.flight.components import check_crtp_endpoint, plant_config
 from host_tools.flight.paper_tests import PAPER_TESTS
 from host_tools.flight.vision_camera import model_option
 from host_tools.maps import load_map
@@ -45,6 +46,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--app", choices=("python", "c"), default="python",
                         help="flight app: python (default) or c (the C core of crazyflie_app/bolt)")
     add_plant_argument(parser)
+    parser.add_argument("--crtp", type=argtypes.udp_endpoint, metavar="[HOST:]PORT", default=None,
+                        help="each test serves CRTP for cflib/cfclient: the first on PORT, the next on PORT+1, "
+                             "... (docs/crtp.md)")
 
 
 def _selected(text):
@@ -77,6 +81,14 @@ def run(args: argparse.Namespace) -> int:
         raise ForaNavError("--jobs: must be at least 1")
     camera_kwargs = _camera_kwargs(args, tests)
     plant_config(args.plant, None)  # the firmware plant is built, or one line saying how
+    if args.crtp:
+        endpoints = paper_tests.crtp_endpoints(args.crtp, len(tests))
+        if int(endpoints[-1].rpartition(":")[2]) > 65535:
+            raise ForaNavError("--crtp %s: %d tests need ports up to %s" % (args.crtp, len(tests), endpoints[-1]))
+        for endpoint in endpoints:
+            check_crtp_endpoint(endpoint)
+        for test, endpoint in zip(tests, endpoints):
+            print("  CRTP: Test %d answers on udp://%s" % (test.number, endpoint), file=sys.stderr)
     started = time.monotonic()
 
     def on_result(entry):
@@ -85,7 +97,8 @@ def run(args: argparse.Namespace) -> int:
                                                    else "FAIL", entry["wall_s"]), file=sys.stderr)
 
     results = paper_tests.run_tests(tests, out_dir=args.out, jobs=args.jobs, on_result=on_result,
-                                    camera_kwargs=camera_kwargs, app=args.app, plant=args.plant)
+                                    camera_kwargs=camera_kwargs, app=args.app, plant=args.plant,
+                                    crtp=args.crtp)
     wall = round(time.monotonic() - started, 1)
     paths = paper_tests.write_outputs(results, Path(args.out), wall_s=wall, appearance=camera_kwargs.get("appearance"))
     if args.json:

@@ -1,10 +1,12 @@
 """The components a flight is composed of (see ``host_tools.flight.harness``): ``FlightRig`` (emulated
 Crazyflie + pty wire + the app), ``FlightRecord`` (taps: reached trees, trajectory, tlog), ``HideFault``,
-``Delivery`` and ``CameraFeed`` (the lockstep world task: frames, wire faults, latency) and ``Monitor``
-(trajectory, telemetry, progress, stop after landing)."""
+``Delivery`` and ``CameraFeed`` (the lockstep world task: frames, wire faults, latency), ``Monitor``
+(trajectory, telemetry, progress, stop after landing) and, with option crtp, the Crazyflie's CRTP server
+(``open_crtp``: cflib and cfclient connect to the flight, docs/crtp.md)."""
 import heapq
 import math
 import os
+import socket
 from collections.abc import Callable
 from pathlib import Path
 
@@ -12,6 +14,7 @@ import numpy as np
 
 from crazyflie_app.firmware import Crazyflie, MavModelConfig, v_task_delay
 from crazyflie_app.firmware.commander import setpoint_t
+from crazyflie_app.firmware.crtp import CrtpServer
 from crazyflie_app.firmware.freertos import Task
 from crazyflie_app.firmware.sil.stack import FirmwarePlantConfig, FirmwarePlantUnavailable, check_available
 from crazyflie_app.firmware.supervisor import LANDED, LOCKED, WARNING_LEVEL_OUT
@@ -120,6 +123,32 @@ def open_tlog(out_dir: str | os.PathLike | None, options: dict) -> TlogWriter | 
         return TlogWriter(Path(out_dir) / "flight.tlog", live_url=options["mavlink"])
     except Exception as err:  # pymavlink raises socket, serial or OS errors for a bad URL
         raise ForaNavError("--mavlink %s: cannot open: %s" % (options["mavlink"], err))
+
+
+def _bind_error(endpoint: str, err: OSError) -> ForaNavError:
+    return ForaNavError("--crtp %s: cannot serve there: %s" % (endpoint, err.strerror or err))
+
+
+def open_crtp(cf: Crazyflie, options: dict) -> CrtpServer | None:
+    """The CRTP server of option crtp ('HOST:PORT', checked by check_options), bound now so that a port in
+    use is an error before the flight; None without the option."""
+    if options["crtp"] is None:
+        return None
+    host, _, port = options["crtp"].rpartition(":")
+    try:
+        return CrtpServer(cf, host, int(port), lockstep=bool(options["lockstep"]))
+    except OSError as err:
+        raise _bind_error(options["crtp"], err)
+
+
+def check_crtp_endpoint(endpoint: str) -> None:
+    """ForaNavError unless 'HOST:PORT' can be served now (the commands check before they start any work)."""
+    host, _, port = endpoint.rpartition(":")
+    try:
+        with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
+            probe.bind((host, int(port)))
+    except OSError as err:
+        raise _bind_error(endpoint, err)
 
 
 class FlightRecord:

@@ -36,6 +36,9 @@ before the clock moves on, so the same map and seed give the same summary and th
     app            the flight app under test, by registered name (default 'python'; see register_app)
     plant          'reduced' (default: the reduced MAV model) or 'firmware' (the real firmware, docs/firmware-plant.md)
     profile        count the CPU time of every task: the summary gets "stage_cpu_s" (host_tools.flight.stages)
+    crtp           'HOST:PORT': the emulated Crazyflie serves CRTP there (cflib's udp:// link; port 0: any
+                   free port, see ``Flight.crtp.uri``); docs/crtp.md. Without a client the flight's outputs
+                   are the same bytes as without it
 
 ``progress(t_s, phase_name)`` is called every simulated second.
 
@@ -59,7 +62,7 @@ from host_tools.flight.components import (  # noqa: F401  (the harness's public 
     AFTER_LANDING_MS, GARBAGE_LINES, HEARTBEAT_PERIOD_MS, MAV_STATE_ACTIVE, MAV_STATE_CRITICAL, MAV_STATE_EMERGENCY,
     MAV_STATE_STANDBY, MONITOR_PERIOD_MS, MONITOR_TASK_PRI, PARTIAL_SPLIT_DELAY_MS, PROGRESS_PERIOD_MS,
     REACHED_MATCH_RADIUS_M, TELEMETRY_PERIOD_MS, TRAJECTORY_PERIOD_MS, WORLD_TASK_PRI, CameraFeed, Delivery,
-    FlightRecord, FlightRig, HideFault, Monitor, open_tlog)
+    FlightRecord, FlightRig, HideFault, Monitor, open_crtp, open_tlog)
 from host_tools.flight.registry import (  # noqa: F401
     CAMERA_MODULES, DEFAULT_OPTIONS, Camera, app_factory, app_names, camera_factory, check_options, register_app,
     register_camera)
@@ -85,8 +88,15 @@ class Flight:
         self.out_dir = Path(out_dir) if out_dir is not None else None
         self.rig = FlightRig(pmap, camera, seed, self.options)
         try:
+            self.crtp = open_crtp(self.rig.cf, self.options)  # before the tlog: a port in use writes nothing
+        except BaseException:
+            self.rig.close()
+            raise
+        try:
             tlog = open_tlog(self.out_dir, self.options)
         except BaseException:
+            if self.crtp is not None:
+                self.crtp.close()
             self.rig.close()
             raise
         self.record = FlightRecord(pmap, self.rig, tlog)
@@ -110,11 +120,22 @@ class Flight:
         cf.x_task_create(self.monitor.task(), "HARNESS_MONITOR", MONITOR_TASK_PRI)
         if self.options["profile"]:
             cf.scheduler.profile()
+        if self.crtp is not None:
+            self.crtp.start()  # the last task: it adds nothing the others see unless a client speaks
         cpu0 = time.process_time()
         cf.run_until(int(float(self.options["max_time_s"]) * 1000) + 1)
         self.cpu_s = time.process_time() - cpu0
 
+    def wait_wall(self, seconds: float) -> None:
+        """Let ``seconds`` of wall time pass (the realtime pacer): serving CRTP requests meanwhile."""
+        if self.crtp is not None:
+            self.crtp.serve_for(seconds)
+        else:
+            time.sleep(seconds)
+
     def close(self, keep: bool = True) -> None:
+        if self.crtp is not None:
+            self.crtp.close()
         self.rig.close()
         self.record.close(keep=keep)
 

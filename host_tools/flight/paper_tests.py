@@ -76,14 +76,16 @@ def passed(summary: dict) -> bool:
 
 
 def fly_test(test: PaperTest, out_dir: str | os.PathLike | None = None, map_path: str | None = None,
-             camera_kwargs: dict | None = None, app: str = "python", plant: str = "reduced") -> dict:
+             camera_kwargs: dict | None = None, app: str = "python", plant: str = "reduced",
+             crtp: str | None = None) -> dict:
     """Fly one PaperTest -> the fly summary plus "test", "map", "situation", "passed", "wall_s".
 
     ``camera_kwargs``: extra VisionCamera arguments (appearance, model) from the command line; ``app``: the
-    flight app, 'python' or 'c' (harness option ``app``); ``plant``: 'reduced' or 'firmware'."""
+    flight app, 'python' or 'c' (harness option ``app``); ``plant``: 'reduced' or 'firmware'; ``crtp``:
+    'HOST:PORT' the flight serves CRTP on."""
     pmap = load_map(map_path or test.map)
     started = time.monotonic()
-    options = {"max_time_s": MAX_TIME_S, "app": app, "plant": plant}
+    options = {"max_time_s": MAX_TIME_S, "app": app, "plant": plant, "crtp": crtp}
     options.update(test.options)
     summary = fly_with_vision(pmap, seed=test.seed, options=options,
                               out_dir=None if out_dir is None else Path(out_dir) / ("test%d" % test.number),
@@ -93,16 +95,27 @@ def fly_test(test: PaperTest, out_dir: str | os.PathLike | None = None, map_path
     return summary
 
 
+def crtp_endpoints(base: str | None, count: int) -> list[str | None]:
+    """'HOST:PORT' for each of ``count`` flights: PORT, PORT+1, ... (None each without ``base``)."""
+    if base is None:
+        return [None] * count
+    host, _, port = base.rpartition(":")
+    return ["%s:%d" % (host, int(port) + i) for i in range(count)]
+
+
 def run_tests(tests: Sequence[PaperTest] = PAPER_TESTS, out_dir: str | os.PathLike | None = None,
               jobs: int | None = None, on_result: Callable[[dict], None] | None = None,
-              camera_kwargs: dict | None = None, app: str = "python", plant: str = "reduced") -> list[dict]:
-    """Fly ``tests`` (in test order in the result); ``on_result(entry)`` is called as each one finishes."""
+              camera_kwargs: dict | None = None, app: str = "python", plant: str = "reduced",
+              crtp: str | None = None) -> list[dict]:
+    """Fly ``tests`` (in test order in the result); ``on_result(entry)`` is called as each one finishes.
+    ``crtp``: 'HOST:PORT' served by the first test, PORT+1 by the second, ... (``crtp_endpoints``)."""
     jobs = max(1, min(len(tests), jobs or os.cpu_count() or 1))
     # The workers are fresh interpreters (spawn): importing host_tools limits their BLAS threads before numpy.
     by_number = {}
     context = multiprocessing.get_context("spawn")
     with concurrent.futures.ProcessPoolExecutor(max_workers=jobs, mp_context=context) as pool:
-        futures = [pool.submit(fly_test, test, out_dir, None, camera_kwargs, app, plant) for test in tests]
+        futures = [pool.submit(fly_test, test, out_dir, None, camera_kwargs, app, plant, endpoint)
+                   for test, endpoint in zip(tests, crtp_endpoints(crtp, len(tests)))]
         for future in concurrent.futures.as_completed(futures):
             entry = future.result()
             by_number[entry["test"]] = entry

@@ -69,7 +69,7 @@ class _RealtimePacer:
                 self.wall0 = time.monotonic()
             lag = time.monotonic() - (self.wall0 + now / 1000.0 / self.speed)
             if lag < 0:
-                time.sleep(-lag)
+                flight.wait_wall(-lag)  # a CRTP client is served while the pacer waits
             self.max_lag_s = max(self.max_lag_s, lag)
             flight.hide.update(now)
             if self.kill_camera_at_ms is not None and now >= self.kill_camera_at_ms and flight.camera_killed_ms is None:

@@ -11,12 +11,13 @@ from crazyflie_app.firmware import Crazyflie
 from crazyflie_app.firmware.system import PLANTS
 from crazyflie_app.navigation import NavigationApp
 from crazyflie_app.uart2_link import Uart2Link
+from host_tools.argtypes import parse_udp_endpoint
 from host_tools.errors import ForaNavError
 
 DEFAULT_OPTIONS = {
     "dropout": 0.0, "hide_tree": None, "hide_s": 5.0, "hide_at_s": None, "silence": (), "garbage_rate": 0.0,
     "partial_rate": 0.0, "lockstep": True, "max_time_s": 900.0, "model": None, "params": None, "start": None,
-    "mavlink": None, "decks": ("bcFlow2", "bcLoco"), "app": "python", "plant": "reduced",
+    "mavlink": None, "decks": ("bcFlow2", "bcLoco"), "app": "python", "plant": "reduced", "crtp": None,
     "profile": False,
 }
 POSITIONINGS = ("uwb", "flow")  # Loco deck + Flow deck, or the Flow deck alone
@@ -74,6 +75,11 @@ def check_options(options: dict | None) -> dict:
         raise ForaNavError("flight options hide_s / max_time_s must be positive")
     if merged["plant"] not in PLANTS:
         raise ForaNavError("flight option plant: unknown plant %r (have %s)" % (merged["plant"], ", ".join(PLANTS)))
+    if merged["crtp"] is not None:
+        try:
+            merged["crtp"] = "%s:%d" % parse_udp_endpoint(merged["crtp"], low_port=0)
+        except ValueError as err:
+            raise ForaNavError("flight option crtp: %s" % err)
     return merged
 
 

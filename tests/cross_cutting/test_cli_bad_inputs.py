@@ -184,13 +184,20 @@ CASES = [
     (FLY + ["--out", "ro"], "--out"),
     (["fly", "--map", "map1", "--camera", "thermal"], "--camera"),
     (["fly", "--map", "{in}/deep.json", "--camera", "oracle"], "deep.json"),
+    (FLY + ["--crtp", "abc"], "--crtp"),
+    (FLY + ["--crtp", "127.0.0.1:70000"], "--crtp"),
+    (FLY + ["--crtp", "0"], "--crtp"),
+    (FLY + ["--crtp", "192.0.2.1:19850"], "--crtp"),  # an address of no interface here: cannot bind
     # paper-tests, demo
     (["paper-tests", "--out", "afile"], "--out"),
     (["paper-tests", "--jobs", "0", "--out", "paper"], "--jobs"),
     (["paper-tests", "--tests", "42", "--out", "paper"], "--tests"),
+    (["paper-tests", "--crtp", "localhost:", "--out", "paper"], "--crtp"),
+    (["paper-tests", "--crtp", "65530", "--out", "paper"], "--crtp"),  # 9 tests: ports past 65535
     (["demo", "--out", "afile"], "--out"),
     (["demo", "--out", "ro"], "--out"),
     (["demo", "--seed", "-1"], "--seed"),
+    (["demo", "--crtp", "-5"], "--crtp"),
     # replay
     (["replay", "{in}/backwards"], "t_s"),
     (["replay", "{in}/latin1_clip"], "clip.json"),

@@ -77,6 +77,8 @@ class FirmwareCommander:
 class FirmwareSupervisor:
     """supervisor.c's state, seen from the host: its name, the transitions with their ticks, arming."""
 
+    require_arming = True  # the Bolt build (bolt_defconfig: CONFIG_MOTORS_REQUIRE_ARMING)
+
     def __init__(self, stack: FirmwareStack, clock: FirmwareClock):
         self.stack, self.clock = stack, clock
         self.events = []  # (tick, state entered)
@@ -116,6 +118,11 @@ class FirmwareSupervisor:
     def supervisor_is_armed(self) -> bool:
         self.clock.sync()
         return bool(self.stack.status.armed)
+
+    def supervisor_get_info_bitfield(self) -> int:
+        """supervisor.c's own supervisorGetInfoBitfield()."""
+        self.clock.sync()
+        return self.stack.lib.sil_supervisor_info_bitfield()
 
 
 class FirmwareModel:

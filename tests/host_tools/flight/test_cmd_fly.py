@@ -1,5 +1,6 @@
-"""foranav fly: JSON and table output, default output folder, --camera sim, bad arguments."""
+"""foranav fly: JSON and table output, default output folder, --camera sim, bad arguments, --crtp in use."""
 import json
+import socket
 from pathlib import Path
 
 from host_tools import cli
@@ -49,3 +50,15 @@ def test_that_a_bad_mavlink_url_fails_cleanly(tmp_path, capsys):
     assert cli.main(["fly", "--map", "map1", "--out", str(tmp_path), "--mavlink", "udpout:localhost:notaport"]) == 2
     assert "--mavlink" in capsys.readouterr().err
     assert list(tmp_path.iterdir()) == []
+
+
+def test_that_a_crtp_port_in_use_fails_in_one_line_and_writes_nothing(tmp_path, capsys):
+    out = tmp_path / "never"
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as taken:
+        taken.bind(("127.0.0.1", 0))
+        port = taken.getsockname()[1]
+        assert cli.main(["fly", "--map", "map1", "--camera", "oracle", "--out", str(out),
+                         "--crtp", "127.0.0.1:%d" % port]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--crtp 127.0.0.1:%d" % port in err[0]
+    assert not out.exists()

@@ -9,6 +9,7 @@ import pytest
 
 from host_tools.errors import ForaNavError
 from host_tools.flight import OracleCamera, run_flight
+from host_tools.flight.harness import Flight
 from host_tools.maps import load_map
 
 MEAN_DEVIATION_LIMIT_M = 0.05
@@ -192,3 +193,18 @@ def test_that_an_offset_camera_mount_is_flown_and_scored_at_the_camera():
     summary = run_flight(pmap, camera, options={"params": {"app.camOffsetX": 0.2, "app.camOffsetY": -0.05}})
     assert summary["success"]
     assert summary["mean_deviation_m"] <= MEAN_DEVIATION_LIMIT_M
+
+
+def test_that_serving_crtp_without_a_client_changes_no_byte_of_the_flight(tmp_path):
+    # Fixture: the same lockstep flight (its first 40 s), as ever and serving CRTP that nobody connects to
+    pmap = load_map("map1")
+    tlogs, summaries = [], []
+    for name, options in (("plain", {"max_time_s": 40}), ("served", {"max_time_s": 40, "crtp": "127.0.0.1:0"})):
+        flight = Flight(pmap, OracleCamera(pmap, seed=0), seed=0, out_dir=tmp_path / name, options=options)
+        flight.run()
+        flight.close()
+        tlogs.append((tmp_path / name / "flight.tlog").read_bytes())
+        summaries.append(flight.summary())
+    # Assert: the same tlog bytes and the same summary
+    assert tlogs[0] == tlogs[1] and len(tlogs[0]) > 0
+    assert summaries[0] == summaries[1]

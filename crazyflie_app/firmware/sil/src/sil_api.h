@@ -104,6 +104,7 @@ uint32_t sil_commander_get_inactivity_time(void);
 int sil_commander_get_active_priority(void);
 int sil_supervisor_request_arming(int do_arm);
 const char *sil_supervisor_state_name(int state);
+int sil_supervisor_info_bitfield(void);  /* supervisorGetInfoBitfield() */
 /* Copy (and forget) the console text printed since the last call; returns its length. */
 int sil_console_read(char *buffer, int size);
 

@@ -289,6 +289,8 @@ int sil_supervisor_request_arming(int do_arm) {
   return taken;
 }
 
+int sil_supervisor_info_bitfield(void) { return supervisorGetInfoBitfield(); }
+
 const char *sil_supervisor_state_name(int s) { return supervisorGetStateName((supervisorState_t)s); }
 
 int sil_console_read(char *buffer, int size) {
