@@ -9,6 +9,7 @@ import os
 import socket
 from collections.abc import Callable
 from pathlib import Path
+from typing import Protocol
 
 import numpy as np
 
@@ -40,6 +41,23 @@ GARBAGE_LINES = (b"OK", b"ERR Unsupported command [foo]", b"ALIVE", b"INF Camera
                  b"N2 oil_palm 12 -40", b"T2 abc def", b"T2 5000 0", b"\x00\xff\xfe binary",
                  b"X" * 150, b"T2 1 2 3 4 5 6 7 8 9 " * 8)
 MAV_STATE_STANDBY, MAV_STATE_ACTIVE, MAV_STATE_CRITICAL, MAV_STATE_EMERGENCY = 3, 4, 5, 6
+
+class FlightView(Protocol):
+    """What scoring (``summary``) and the plot (``plot``) read of a finished flight; ``harness.Flight`` is one.
+    Declared here, below the harness, so neither of them imports the harness that imports them."""
+
+    pmap: PlantationMap
+    camera: Camera
+    seed: int
+    options: dict
+    rig: "FlightRig"
+    record: "FlightRecord"
+    hide: "HideFault"
+    reached: list
+    trajectory: list
+    detections: list
+    app_trees: list
+
 
 class FlightRig:
     """The bench: the emulated Crazyflie, the pty wire and the app under test, configured for one map."""

@@ -1,21 +1,19 @@
 """The trajectory plot of a flight (matplotlib, Agg): map trees, path F, flown trajectory, detections."""
 import os
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from crazyflie_app.navigation_core import PHASE_RECOVERY
 from host_tools import fileio
+from host_tools.flight.components import FlightView
 from host_tools.maps import PlantationMap
 from host_tools.plotting import Circle, plt
 from host_tools.sim.world import World
-
-if TYPE_CHECKING:  # the harness imports this module when a flight draws
-    from host_tools.flight.harness import Flight
 
 COLOURS = {"target": "#2e7d32", "non_target": "#9e9e9e", "reached": "#1565c0", "recovery": "#d32f2f",
            "path": "#555555", "truth": "#1565c0", "estimate": "#90caf9", "app_tree": "#ff8f00"}
 
 
-def plot_trajectory(flight: "Flight", path: str | os.PathLike) -> None:
+def plot_trajectory(flight: FlightView, path: str | os.PathLike) -> None:
     """Draw ``flight`` (a harness Flight after its run) into the PNG ``path`` (atomic write)."""
     pmap = flight.pmap
     fig, ax = plt.subplots(figsize=(8, 3.6), dpi=110)

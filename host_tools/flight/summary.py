@@ -1,14 +1,12 @@
 """Scoring of a finished flight: the summary record ``foranav fly`` prints and the sweeps store."""
 import math
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 from crazyflie_app.firmware.supervisor import LOCKED
 from crazyflie_app.navigation_core import PHASE_DONE, PHASE_NO_CAMERA
+from host_tools.flight.components import FlightView
 from host_tools.flight.stats import mean_ci95
 
-if TYPE_CHECKING:  # the harness imports this module
-    from host_tools.flight.harness import Flight
 
 
 def _figures(values: list[float], digits: int) -> dict:
@@ -25,7 +23,7 @@ def error_figures(errors: list[tuple[float, float]]) -> dict | None:
     return {"position_m": _figures([e[0] for e in errors], 4), "yaw_deg": _figures([e[1] for e in errors], 2)}
 
 
-def summarize(flight: "Flight") -> dict:
+def summarize(flight: FlightView) -> dict:
     """The flight summary (the record fly prints and sweeps store) of a finished Flight."""
     rig, record, pmap = flight.rig, flight.record, flight.pmap
     targets = sorted(t.id for t in pmap.targets)
