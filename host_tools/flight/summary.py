@@ -8,7 +8,6 @@ from host_tools.flight.components import FlightView
 from host_tools.flight.stats import mean_ci95
 
 
-
 def _figures(values: list[float], digits: int) -> dict:
     ordered = sorted(values)
     p95 = ordered[min(len(ordered) - 1, int(math.ceil(0.95 * len(ordered))) - 1)]
