@@ -8,6 +8,7 @@ With --crtp [HOST:]PORT the emulated Crazyflie also serves CRTP there for cflib 
 """
 import argparse
 import math
+from typing import Any
 import sys
 import time
 from pathlib import Path
@@ -76,8 +77,15 @@ class _Bar:
         self.stream.flush()
 
 
-def run(args: argparse.Namespace) -> int:
+def fly_demo(seed: int = DEMO_SEED, camera: VisionCamera | None = None, **run_kwargs: Any) -> dict:
+    """The demo's flight (Map 1, the vision camera, the default options unless given): its summary. README's
+    demo output is generated from it (``make docs``)."""
+    pmap = load_map(DEMO_MAP)
+    camera = camera if camera is not None else VisionCamera(pmap, seed=seed)
+    return run_flight(pmap, camera, seed=seed, **run_kwargs)
 
+
+def run(args: argparse.Namespace) -> int:
     out = fileio.check_output_dir(Path(args.out))
     plant_config(args.plant, None)  # the firmware plant is built, or one line saying how
     if args.crtp:
@@ -97,7 +105,7 @@ def run(args: argparse.Namespace) -> int:
     options = {"plant": args.plant}
     if args.crtp:
         options["crtp"] = args.crtp
-    summary = run_flight(pmap, camera, seed=args.seed, out_dir=out, progress=bar, options=options)
+    summary = fly_demo(args.seed, camera, out_dir=out, progress=bar, options=options)
     bar.finish(summary["mission_time_s"])
     summary.pop("cpu_s", None)
     print()

@@ -23,6 +23,17 @@ def test_that_the_readme_command_table_is_generated_and_current():
         assert "| `foranav %s` |" % name in text
 
 
+def test_that_the_readme_demo_output_is_what_the_demo_prints():
+    # Fixture: the README as committed
+    text = docs_gen.README.read_text(encoding="utf-8")
+    # Test: the demo's own flight, formatted as foranav demo prints it
+    block = docs_gen.demo_output()
+    # Assert: the committed copy is that output, and an edited copy counts as stale
+    assert block in text, "stale README.md demo output: run make docs"
+    edited = text.replace(block, block.replace("SUCCESS", "NOT COMPLETED"))
+    assert docs_gen.readme_with_table(edited) == text
+
+
 def test_that_every_command_and_option_is_in_the_command_table():
     text = docs_gen.commands_markdown()
     for name, (module_name, help_text) in cli.COMMANDS.items():
