@@ -215,20 +215,23 @@ def stale_files(out: Path = DEFAULT_OUT) -> list[str]:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m host_tools.docs_gen", description=__doc__.splitlines()[0])
     parser.add_argument("--check", action="store_true", help="write nothing; exit 1 when a file is stale")
-    parser.add_argument("--out", type=Path, default=DEFAULT_OUT, help="output folder (default docs/reference)")
+    parser.add_argument("--out", type=Path, default=DEFAULT_OUT,
+                        help="output folder (default docs/reference; another folder leaves README.md alone)")
     args = parser.parse_args(argv)
+    with_readme = args.out.resolve() == DEFAULT_OUT.resolve()
     if args.check:
         stale = stale_files(args.out)
         for name in stale:
             print("stale: %s (run make docs)" % (args.out / name))
-        if readme_is_stale():
+        readme_stale = with_readme and readme_is_stale()
+        if readme_stale:
             print("stale: README.md command table or demo output (run make docs)")
-        return 1 if stale or readme_is_stale() else 0
+        return 1 if stale or readme_stale else 0
     args.out.mkdir(parents=True, exist_ok=True)
     for name, text in render_all().items():
         fileio.write_text(args.out / name, text)
         print("wrote %s" % (args.out / name))
-    if readme_is_stale():
+    if with_readme and readme_is_stale():
         fileio.write_text(README, readme_with_table(README.read_text(encoding="utf-8")))
         print("wrote the command table and demo output of %s" % README)
     return 0
