@@ -19,6 +19,8 @@ from host_tools.detection import dataset, evaluation, report, training
 from host_tools.detection.threads import single_threaded
 from host_tools.errors import ForaNavError
 
+import foranav_colour as colours
+
 import foranav_features as features
 import foranav_model
 
@@ -38,7 +40,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="frame width the window sizes refer to (default %(default)s: the flight camera)")
     parser.add_argument("--margin", type=float, default=training.DEFAULT_MARGIN,
                         help="training window side / crown size (default %(default)s)")
-    parser.add_argument("--colour", choices=features.COLOUR_KINDS, default="templates",
+    parser.add_argument("--colour", choices=colours.COLOUR_KINDS, default="templates",
                         help="colour model per imagery: templates (hue/saturation correlation) or linear "
                         "(a classifier on the histograms); default %(default)s")
     parser.add_argument("--colour-templates", type=int, default=1, metavar="K",

@@ -27,6 +27,7 @@ from host_tools.detection import dataset
 from host_tools.errors import ForaNavError
 
 import foranav_detector as detector_core
+import foranav_colour as colours
 import foranav_features as features
 from foranav_model import TreeModel
 
@@ -41,8 +42,8 @@ def window_cues(model: TreeModel, domain_index: int, value: np.ndarray, hsv: np.
     small = _downscale_crop(value) if small is None else small
     score = model.score(features.top_layer_hog(small))
     domain = model.domains[domain_index]
-    prepared = features.prepare_colour_vectors(model.colour_kind, domain.colour_vectors)
-    colour = features.colour_score(model.colour_kind, prepared, domain.colour_bias, *features.smoothed_hs(hsv))
+    prepared = colours.prepare_colour_vectors(model.colour_kind, domain.colour_vectors)
+    colour = colours.colour_score(model.colour_kind, prepared, domain.colour_bias, *colours.smoothed_hs(hsv))
     return score, colour, features.hog_texture(value)
 
 

@@ -11,6 +11,7 @@ from host_tools.detection.dataset import Frame
 from host_tools.detection.svm import train_linear_svm
 
 import foranav_detector as detector_core
+import foranav_colour as colours
 import foranav_features as features
 from foranav_model import TreeModel
 
@@ -34,25 +35,25 @@ def colour_model(frames: Sequence[Frame], species: str, margin: float, kind: str
     windows (look-alikes, windows cutting a crown, background)."""
     histograms = []
     for frame, rows, cols in _windows(frames, margin, lambda label: label == species):
-        hue, sat = features.hs_histograms(features.colour_region(frame.hsv[rows, cols]))
+        hue, sat = colours.hs_histograms(colours.colour_region(frame.hsv[rows, cols]))
         histograms.append(np.concatenate([hue / hue.sum(), sat / sat.sum()]))
     if not histograms:
         raise ValueError("no complete '%s' trees whose window fits the frame" % species)
     if kind == "templates" and (templates <= 1 or len(histograms) <= templates):
-        total = np.zeros(2 * features.HS_BINS)
+        total = np.zeros(2 * colours.HS_BINS)
         for histogram in histograms:  # summed one by one in float64 (the mean is the same bytes every time)
             total += histogram
         return (total / len(histograms)).astype(np.float32)[None, :], 0.0
     histograms = np.array(histograms, np.float64)
     if kind == "templates":
         return _kmeans(histograms, templates, rng).astype(np.float32), 0.0
-    positive = [features.colour_feature(*features.smoothed_hs(frame.hsv[rows, cols]))
+    positive = [colours.colour_feature(*colours.smoothed_hs(frame.hsv[rows, cols]))
                 for frame, rows, cols in _windows(frames, margin, lambda label: label == species)]
     negative = []
     for frame in frames:
         for cx, cy, side in negative_windows(frame, species, margin, rng, survey):
             rows, cols = dataset.pixel_window(frame, cx, cy, side)
-            negative.append(features.colour_feature(*features.smoothed_hs(frame.hsv[rows, cols])))
+            negative.append(colours.colour_feature(*colours.smoothed_hs(frame.hsv[rows, cols])))
     if not negative:
         raise ValueError("a linear colour model needs other windows than trees in the imagery")
     weights, bias = train_linear_svm(np.vstack([positive, negative]),

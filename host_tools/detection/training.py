@@ -40,6 +40,8 @@ from host_tools.detection.examples import (  # noqa: F401
     positive_descriptors as _positive_descriptors, second_stage_examples as _second_stage_examples, survey_windows)
 from host_tools.detection.svm import train_linear_svm
 
+import foranav_colour as colours
+
 import foranav_features as features
 from foranav_model import Domain, TreeModel
 
@@ -99,8 +101,8 @@ def train(data: Sequence[Imagery] | Sequence[dataset.Frame], species: str, seed:
     """
     log = log or (lambda message: None)
     imageries = as_imageries(data)
-    if colour_kind not in features.COLOUR_KINDS:
-        raise ValueError("colour model must be one of %s" % ", ".join(features.COLOUR_KINDS))
+    if colour_kind not in colours.COLOUR_KINDS:
+        raise ValueError("colour model must be one of %s" % ", ".join(colours.COLOUR_KINDS))
     rng = np.random.RandomState(seed)
     learning, calibration = {}, {}
     for imagery in imageries:
@@ -128,7 +130,7 @@ def train(data: Sequence[Imagery] | Sequence[dataset.Frame], species: str, seed:
     for imagery in targets:
         vectors, bias = _colour_model(learning[imagery.name], species, margin, colour_kind, colour_templates, rng,
                                       not camera[imagery.name])
-        frame_colour = np.mean([features.frame_colour(f.hsv) for f in imagery.frames], axis=0)
+        frame_colour = np.mean([colours.frame_colour(f.hsv) for f in imagery.frames], axis=0)
         domains.append(Domain(imagery.name, 0.0, -1.0, 0.0, vectors, bias, frame_colour))
     model = TreeModel(
         species=species, svm_weights=np.zeros(features.hog_descriptor_length()), svm_bias=0.0, domains=domains,

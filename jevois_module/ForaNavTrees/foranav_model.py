@@ -49,6 +49,8 @@ import zipfile
 
 import numpy as np
 
+import foranav_colour as colours
+
 import foranav_features as features
 
 FORMAT_VERSION = 3
@@ -67,7 +69,7 @@ FIELD_KINDS = {"format_version": "iu", "species": "U", "hog_config": "iu", "svm_
                "reference_width": "iu", "crown_ratios": "fiu", "seed": "iu", "notes": "U", "provenance": "U"}
 SCALAR_FIELDS = ("format_version", "species", "svm_kind", "svm_bias", "edge_threshold", "colour_kind",
                  "window_margin", "reference_width", "seed", "notes", "provenance")
-COLOUR_LENGTH = 2 * features.HS_BINS
+COLOUR_LENGTH = 2 * colours.HS_BINS
 LFS_POINTER_PREFIX = b"version https://git-lfs"
 NPZ_MAGIC = b"PK\x03\x04"
 NPY_MAGIC = b"\x93NUMPY"
@@ -133,11 +135,11 @@ class TreeModel(object):
         self.edge_threshold = float(edge_threshold)
         self.colour_kind = str(colour_kind)
         if domains is None:
-            hue = np.ones(features.HS_BINS) if template_hue is None else template_hue
-            sat = np.ones(features.HS_BINS) if template_sat is None else template_sat
+            hue = np.ones(colours.HS_BINS) if template_hue is None else template_hue
+            sat = np.ones(colours.HS_BINS) if template_sat is None else template_sat
             hue, sat = np.asarray(hue, np.float32).ravel(), np.asarray(sat, np.float32).ravel()
-            if hue.shape != (features.HS_BINS,) or sat.shape != (features.HS_BINS,):
-                raise ModelFormatError("template_hue and template_sat must have %d bins" % features.HS_BINS)
+            if hue.shape != (colours.HS_BINS,) or sat.shape != (colours.HS_BINS,):
+                raise ModelFormatError("template_hue and template_sat must have %d bins" % colours.HS_BINS)
             domains = [Domain(domain_name, svm_threshold, hs_threshold, variance_threshold,
                               np.concatenate([hue, sat])[None, :])]
         self.domains = list(domains)
@@ -164,8 +166,8 @@ class TreeModel(object):
                             lambda self, value: setattr(self.domains[0], "hs_threshold", float(value)))
     variance_threshold = property(lambda self: self.domains[0].variance_threshold,
                                   lambda self, value: setattr(self.domains[0], "variance_threshold", float(value)))
-    template_hue = property(lambda self: self.domains[0].colour_vectors[0, :features.HS_BINS])
-    template_sat = property(lambda self: self.domains[0].colour_vectors[0, features.HS_BINS:])
+    template_hue = property(lambda self: self.domains[0].colour_vectors[0, :colours.HS_BINS])
+    template_sat = property(lambda self: self.domains[0].colour_vectors[0, colours.HS_BINS:])
 
     def domain(self, name):
         """The domain of this name; ModelFormatError (naming the known ones) when there is none."""
@@ -184,9 +186,9 @@ class TreeModel(object):
             raise ModelFormatError("window_sizes must be non-empty and at least %d px" % features.HOG_WINDOW)
         if not self.species or len(self.species.split()) != 1:
             raise ModelFormatError("species must be one word")
-        if self.colour_kind not in features.COLOUR_KINDS:
+        if self.colour_kind not in colours.COLOUR_KINDS:
             raise ModelFormatError("colour_kind %r is not one of %s" % (self.colour_kind,
-                                                                      ", ".join(features.COLOUR_KINDS)))
+                                                                      ", ".join(colours.COLOUR_KINDS)))
         if not self.domains:
             raise ModelFormatError("a model needs at least one domain")
         names = [d.name for d in self.domains]
