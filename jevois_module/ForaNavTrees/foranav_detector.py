@@ -21,6 +21,7 @@
 import cv2
 import numpy as np
 
+import foranav_cnn
 import foranav_colour as colours
 
 import foranav_features as features
@@ -46,6 +47,7 @@ class DetectorSettings(object):
     variance_threshold  bottom-layer texture cue (foranav_features.hog_texture, 1/px^2) a detection must exceed
     hs_threshold        mean hue/saturation Pearson correlation with the template a detection must exceed
     second_threshold    second-stage score a detection's window must exceed (models with a second stage)
+    cnn_threshold       the network's logit a detection's window must exceed (models with one, foranav_cnn)
     window_sizes        sliding-window sides W in pixels of THIS frame (None: the model's, scaled by
                         frame width / model reference width and rounded to a multiple of W_d = 24)
     step                window step in downscaled pixels (1..24; 2 = W/12 default, 8 = W/3 as in the paper)
@@ -65,11 +67,13 @@ class DetectorSettings(object):
 
     def __init__(self, svm_threshold=None, variance_threshold=None, hs_threshold=None, window_sizes=None,
                  step=DEFAULT_STEP, nms_overlap=DEFAULT_NMS_OVERLAP, max_detections=DEFAULT_MAX_DETECTIONS,
-                 smoothing=DEFAULT_SMOOTHING, edge_threshold=None, domain=None, second_threshold=None):
+                 smoothing=DEFAULT_SMOOTHING, edge_threshold=None, domain=None, second_threshold=None,
+                 cnn_threshold=None):
         self.svm_threshold = svm_threshold
         self.variance_threshold = variance_threshold
         self.hs_threshold = hs_threshold
         self.second_threshold = second_threshold
+        self.cnn_threshold = cnn_threshold
         self.window_sizes = tuple(window_sizes) if window_sizes else None
         self.step = int(step)
         self.nms_overlap = float(nms_overlap)
@@ -119,7 +123,8 @@ class TreeDetector(object):
         self.settings = settings or DetectorSettings()
         self._scorer = score_maps.WindowScorer(model.svm_weights, model.svm_bias)
         self._plans = {}
-        self._second_scores = {}
+        self._window_scores = {}
+        self._cnn = None if model.cnn_onnx is None else foranav_cnn.CnnStage(model.cnn_onnx, model.cnn_side)
         self._colour = [colours.prepare_colour_vectors(model.colour_kind, d.colour_vectors) for d in model.domains]
         self._fixed_domain = None
         if self.settings.domain is not None:
@@ -181,7 +186,7 @@ class TreeDetector(object):
         """[(plan, score map)] of every window of every size, from the full-resolution value channel."""
         atlas = self._atlas(*value.shape)
         atlas.fill(value)
-        self._second_scores = {}  # a new frame
+        self._window_scores = {}  # a new frame
         return atlas.split(self._scorer.scores(atlas))
 
     def detections_from_maps(self, maps, hsv, value, trace=None):
@@ -198,7 +203,8 @@ class TreeDetector(object):
             candidates.extend(grouping.local_maxima(plan, scores, svm_threshold, edge_threshold))
         candidates.sort(key=lambda c: -c[0])
         if trace is not None:
-            trace.update(maps=maps, peaks=list(candidates), nms=[], colour=[], second=[], domain=self.domain_index)
+            trace.update(maps=maps, peaks=list(candidates), nms=[], colour=[], cnn=[], second=[],
+                         domain=self.domain_index)
         if self.settings.max_detections is not None:
             del candidates[max(MAX_CANDIDATES, CANDIDATES_PER_DETECTION * self.settings.max_detections):]
         if trace is not None:
@@ -210,13 +216,20 @@ class TreeDetector(object):
             group = self.representative_first(grouping.anchored(group), detections, hsv, hs_threshold, trace)
             if group is None:
                 continue
-            x0, y0, side = grouping.pixel_window(group[0], value.shape)
-            if self.model.second_window is not None and self.second_score(
-                    value[y0:y0 + side, x0:x0 + side], (x0, y0, side)) <= self.threshold("second_threshold"):
+            x0, y0, side = window = grouping.pixel_window(group[0], value.shape)
+            rows, cols = slice(y0, y0 + side), slice(x0, x0 + side)
+            if self._cnn is not None and self._window_score("cnn", window, lambda: self._cnn.scores(
+                    [hsv[rows, cols]])[0]) <= self.threshold("cnn_threshold"):
+                continue
+            if trace is not None:
+                trace["cnn"].append(group[0])
+            if self.model.second_window is not None and self._window_score("second", window, lambda: (
+                    self.model.second_score(value[rows, cols]))) <= self.threshold("second_threshold"):
                 continue
             if trace is not None:
                 trace["second"].append(group[0])
-            if features.hog_texture(value[y0:y0 + side, x0:x0 + side]) > variance_threshold:
+            if self._window_score("texture", window, lambda: features.hog_texture(value[rows, cols])) \
+                    > variance_threshold:
                 detections.append(grouping.fuse(group, svm_threshold, margin))
                 if len(detections) == self.settings.max_detections:
                     break
@@ -242,22 +255,20 @@ class TreeDetector(object):
             x0, y0, side = grouping.pixel_window(window, hsv.shape)
             if trace is not None and window is anchor:  # "nms": groups' best windows (funnel, hard negatives)
                 trace["nms"].append(window)
-            if self.colour_score(hsv[y0:y0 + side, x0:x0 + side]) > hs_threshold:
+            if self._window_score("colour", (x0, y0, side), lambda: self.colour_score(
+                    hsv[y0:y0 + side, x0:x0 + side])) > hs_threshold:
                 if trace is not None:
                     trace["colour"].append(window)
                 return [window] + [c for c in group if c is not window]
         return None
 
-    def second_score(self, value_window, key=None):
-        """The second stage's score of a full-resolution value window (models with a second stage); key: the
-        window's (x0, y0, side) in the frame of the last score_maps, whose scores are kept (host calibration
-        runs the later steps many times on one frame's maps)."""
-        if key is not None and key in self._second_scores:
-            return self._second_scores[key]
-        score = self.model.second_score(value_window)
-        if key is not None:
-            self._second_scores[key] = score
-        return score
+    def _window_score(self, kind, window, compute):
+        """A per-window score (colour, network, second stage, texture) of the frame of the last score_maps,
+        computed once: host calibration runs the later steps many times on one frame's maps."""
+        key = (kind, self.domain_index) + tuple(window)
+        if key not in self._window_scores:
+            self._window_scores[key] = compute()
+        return self._window_scores[key]
 
     def colour_score(self, hsv_window):
         """The window's colour score against the current domain's colour model."""

@@ -59,13 +59,27 @@ def iou(a, b):
 
 
 def group(candidates, overlap):
-    """Greedy NMS on candidates sorted best first: each group = the best remaining + those overlapping it."""
-    remaining = list(candidates)
-    while remaining:
-        best = remaining[0]
-        group = [c for c in remaining if c is best or iou(best, c) > overlap]
-        remaining = [c for c in remaining if not (c is best or iou(best, c) > overlap)]
-        yield group
+    """Greedy NMS on candidates sorted best first: each group = the best remaining + those overlapping it.
+    The overlaps of the best with all remaining are one array operation (a survey image has hundreds of
+    candidates), with the very arithmetic of iou, so the groups are the same."""
+    if not candidates:
+        return
+    boxes = np.array([c[1:4] for c in candidates], np.float64)  # cx, cy, side
+    remaining = np.arange(len(candidates))
+    while len(remaining):
+        member = _ious(boxes[remaining[0]], boxes[remaining]) > overlap
+        member[0] = True
+        yield [candidates[i] for i in remaining[member].tolist()]
+        remaining = remaining[~member]
+
+
+def _ious(box, boxes):
+    """iou of one window (cx, cy, side) with an array of them, elementwise."""
+    half, halves = box[2] / 2.0, boxes[:, 2] / 2.0
+    dx = np.minimum(box[0] + half, boxes[:, 0] + halves) - np.maximum(box[0] - half, boxes[:, 0] - halves)
+    dy = np.minimum(box[1] + half, boxes[:, 1] + halves) - np.maximum(box[1] - half, boxes[:, 1] - halves)
+    inter = np.where((dx > 0) & (dy > 0), dx * dy, 0.0)
+    return inter / (box[2] * box[2] + boxes[:, 2] * boxes[:, 2] - inter)
 
 
 def inside_a_crown(candidate, detections, margin):

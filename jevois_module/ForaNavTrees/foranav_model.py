@@ -45,6 +45,11 @@
 #   second_kind      str      optional: "hog+radial" adds foranav_features.radial_descriptor to the HOG
 #                             (absent: "hog", the files written before it keep their bytes)
 #   second_views     int      optional: 4 scores the mean HOG of the window's four quarter turns (absent: 1)
+# Optional (all three or none; `foranav train --cnn`): the learned stage, a small network each group's
+# representative must also pass (foranav_cnn).
+#   cnn_onnx         u8[n]    the network in ONNX form (its bytes)
+#   cnn_side         int      side of its square input, pixels (foranav_cnn.CNN_SIDE)
+#   cnn_threshold    f32[D]   per domain, the logit a detection's window must exceed
 import zipfile
 
 import numpy as np
@@ -75,6 +80,9 @@ NPZ_MAGIC = b"PK\x03\x04"
 NPY_MAGIC = b"\x93NUMPY"
 SECOND_STAGE_KEYS = ("second_window", "second_weights", "second_bias", "second_threshold")
 SECOND_STAGE_KINDS = {"second_window": "iu", "second_weights": "fiu", "second_bias": "fiu", "second_threshold": "fiu"}
+CNN_KEYS = ("cnn_onnx", "cnn_side", "cnn_threshold")
+CNN_KINDS = {"cnn_onnx": "u", "cnn_side": "iu", "cnn_threshold": "fiu"}
+CNN_SIDES = (16, 128)  # smallest and largest input side a model may ask for
 
 
 class ModelFormatError(ValueError):
@@ -91,9 +99,10 @@ class Domain(object):
     """One imagery's colour model and thresholds (see the module comment)."""
 
     def __init__(self, name, svm_threshold, hs_threshold, variance_threshold, colour_vectors, colour_bias=0.0,
-                 frame_colour=None, second_threshold=0.0):
+                 frame_colour=None, second_threshold=0.0, cnn_threshold=0.0):
         self.name = str(name)
         self.second_threshold = float(second_threshold)  # used only by a model with a second stage
+        self.cnn_threshold = float(cnn_threshold)  # used only by a model with a network
         self.svm_threshold = float(svm_threshold)
         self.hs_threshold = float(hs_threshold)
         self.variance_threshold = float(variance_threshold)
@@ -109,7 +118,7 @@ class Domain(object):
         if self.frame_colour.shape != (COLOUR_LENGTH,) or len(self.colour_vectors) == 0:
             raise ModelFormatError("domain %s: colour vectors must have %d values" % (self.name, COLOUR_LENGTH))
         values = [self.svm_threshold, self.hs_threshold, self.variance_threshold, self.colour_bias,
-                  self.second_threshold]
+                  self.second_threshold, self.cnn_threshold]
         if not (np.all(np.isfinite(values)) and np.all(np.isfinite(self.colour_vectors))
                 and np.all(np.isfinite(self.frame_colour))):
             raise ModelFormatError("domain %s: numbers must be finite" % self.name)
@@ -128,7 +137,7 @@ class TreeModel(object):
                  reference_width=352, seed=0, notes="", edge_threshold=DEFAULT_EDGE_THRESHOLD, domains=None,
                  colour_kind="templates", crown_ratios=None, provenance="", domain_name="default",
                  second_window=None, second_weights=None, second_bias=0.0, second_kind="hog",
-                 second_views=1):
+                 second_views=1, cnn_onnx=None, cnn_side=None):
         self.species = str(species)
         self.svm_weights = np.asarray(svm_weights, np.float32).ravel()
         self.svm_bias = float(svm_bias)
@@ -157,6 +166,8 @@ class TreeModel(object):
         self.second_bias = float(second_bias)
         self.second_kind = str(second_kind)
         self.second_views = int(second_views)
+        self.cnn_onnx = None if cnn_onnx is None else bytes(bytearray(np.asarray(cnn_onnx, np.uint8).ravel()))
+        self.cnn_side = None if cnn_side is None else int(cnn_side)
         self.validate()
 
     # The first domain's values (single-imagery models, the camera's settings, older callers).
@@ -216,6 +227,10 @@ class TreeModel(object):
                                        % (self.second_weights.size, length))
             if not np.all(np.isfinite(self.second_weights)) or not np.isfinite(self.second_bias):
                 raise ModelFormatError("second-stage numbers must be finite")
+        if (self.cnn_onnx is None) != (self.cnn_side is None):
+            raise ModelFormatError("a network needs its ONNX bytes and its input side")
+        if self.cnn_onnx is not None and (not self.cnn_onnx or not CNN_SIDES[0] <= self.cnn_side <= CNN_SIDES[1]):
+            raise ModelFormatError("cnn_onnx must not be empty and cnn_side must be %d..%d px" % CNN_SIDES)
         values = [self.svm_bias, self.edge_threshold, self.window_margin] + list(self.svm_weights)
         values += list(self.crown_ratios)
         if (not np.all(np.isfinite(values)) or self.window_margin <= 0 or self.reference_width <= 0
@@ -243,6 +258,9 @@ class TreeModel(object):
                 arrays.update(second_kind=np.array(self.second_kind))
             if self.second_views != 1:
                 arrays.update(second_views=np.array(self.second_views, np.int32))
+        if self.cnn_onnx is not None:  # only then: a model without one keeps its bytes
+            arrays.update(cnn_onnx=np.frombuffer(self.cnn_onnx, np.uint8), cnn_side=np.array(self.cnn_side, np.int32),
+                          cnn_threshold=np.array([d.cnn_threshold for d in self.domains], np.float32))
         return arrays
 
     def _core_arrays(self):
@@ -379,9 +397,10 @@ def model_from_arrays(arrays, name="model"):
         if frame_colour.shape != (count, COLOUR_LENGTH):
             raise ModelFormatError("frame_colour must be (%d domains, %d)" % (count, COLOUR_LENGTH))
         second = _second_stage(arrays, count)
+        cnn = _cnn_stage(arrays, count)
         domains = [Domain(names[i], per_domain["svm_threshold"][i], per_domain["hs_threshold"][i],
                           per_domain["variance_threshold"][i], vectors[i], per_domain["colour_bias"][i],
-                          frame_colour[i], second["threshold"][i]) for i in range(count)]
+                          frame_colour[i], second["threshold"][i], cnn["threshold"][i]) for i in range(count)]
         return TreeModel(
             species=str(arrays["species"]), svm_weights=arrays["svm_weights"], svm_bias=float(arrays["svm_bias"]),
             edge_threshold=float(arrays["edge_threshold"]), colour_kind=str(arrays["colour_kind"]),
@@ -389,7 +408,7 @@ def model_from_arrays(arrays, name="model"):
             reference_width=int(arrays["reference_width"]), crown_ratios=arrays["crown_ratios"],
             seed=int(arrays["seed"]), notes=str(arrays["notes"]), provenance=str(arrays["provenance"]),
             second_window=second["window"], second_weights=second["weights"], second_bias=second["bias"],
-            second_kind=second["kind"], second_views=second["views"])
+            second_kind=second["kind"], second_views=second["views"], cnn_onnx=cnn["onnx"], cnn_side=cnn["side"])
     except ModelFormatError as err:
         raise ModelFormatError("%s: %s" % (name, err))
     except (TypeError, ValueError, IndexError) as err:
@@ -420,3 +439,19 @@ def _second_stage(arrays, count):
     return {"window": int(arrays["second_window"]), "weights": arrays["second_weights"],
             "bias": float(arrays["second_bias"]), "threshold": list(threshold), "kind": str(kind),
             "views": int(views)}
+
+
+def _cnn_stage(arrays, count):
+    """The optional network's fields: all three keys or none (onnx None: no network)."""
+    present = [key for key in CNN_KEYS if key in arrays]
+    if not present:
+        return {"onnx": None, "side": None, "threshold": [0.0] * count}
+    if len(present) != len(CNN_KEYS):
+        raise ModelFormatError("network incomplete (missing %s)" % ", ".join(k for k in CNN_KEYS if k not in arrays))
+    for key, kinds in CNN_KINDS.items():
+        if arrays[key].dtype.kind not in kinds or (key == "cnn_onnx" and arrays[key].dtype.itemsize != 1):
+            raise ModelFormatError("field %s has the wrong type (%s)" % (key, arrays[key].dtype))
+    threshold = np.asarray(arrays["cnn_threshold"], np.float64).ravel()
+    if threshold.shape != (count,) or arrays["cnn_side"].size != 1:
+        raise ModelFormatError("cnn_threshold must have one value per domain (%d), cnn_side one value" % count)
+    return {"onnx": arrays["cnn_onnx"], "side": int(arrays["cnn_side"]), "threshold": list(threshold)}
