@@ -3,6 +3,7 @@
 The default suite needs no PyTorch: it uses the shipped foranav_oil_palm_cnn.npz (trained on rendered frames,
 docs/detector.md says how). Training a network is opt-in (-m slow) and skipped without PyTorch."""
 import io
+import os
 import sys
 
 import cv2
@@ -12,6 +13,7 @@ import pytest
 import host_tools.detection  # noqa: F401  (camera module folder on sys.path)
 from host_tools.cli import main
 from host_tools.detection import common, synthetic, training
+from host_tools.jevois_host import DEFAULT_MODULE_DIR
 
 import foranav_cnn
 import foranav_detector as detector_core
@@ -23,7 +25,7 @@ INPUT_TOLERANCE = 0.15  # the network's input after a change of light and gain (
 
 
 def shipped_cnn_model():
-    return common.load(common.model_path("oil_palm").replace("foranav_oil_palm.npz", CNN_MODEL))
+    return common.load(os.path.join(DEFAULT_MODULE_DIR, CNN_MODEL))
 
 
 def test_that_the_network_input_drops_the_light_and_the_camera_gain():
