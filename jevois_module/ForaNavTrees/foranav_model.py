@@ -35,18 +35,15 @@
 #   seed             int      training seed (provenance)
 #   notes            str      free text: data, counts, figures (provenance)
 #   provenance       str      sources and licences of the training imagery
-# Optional (all four or none; models trained on survey imagery): the second stage, a linear SVM on a finer
-# HOG, with or without the radial cue (foranav_features.second_stage_descriptor), that each group's best window
-# must also pass.
+# Optional (all four or none; survey models): the second stage, a linear SVM on a finer HOG and the radial cue
+# (foranav_features.second_stage_descriptor) that each group's best window must also pass.
 #   second_window    int      side of its downscaled window (48)
 #   second_weights   f32[n]   its weights (n = second_stage_length(second_window, second_kind))
 #   second_bias      f32
 #   second_threshold f32[D]   per domain, the score a detection's window must exceed
-#   second_kind      str      optional: "hog+radial" adds foranav_features.radial_descriptor to the HOG
-#                             (absent: "hog", the files written before it keep their bytes)
+#   second_kind      str      optional: "hog+radial" adds the radial cue to the HOG (absent: "hog")
 #   second_views     int      optional: 4 scores the mean HOG of the window's four quarter turns (absent: 1)
-# Optional (all three or none; `foranav train --cnn`): the learned stage, a small network each group's
-# representative must also pass (foranav_cnn).
+# Optional (all three or none; `train --cnn`): the learned stage, a small network (foranav_cnn).
 #   cnn_onnx         u8[n]    the network in ONNX form (its bytes)
 #   cnn_side         int      side of its square input, pixels (foranav_cnn.CNN_SIDE)
 #   cnn_threshold    f32[D]   per domain, the logit a detection's window must exceed
@@ -55,17 +52,12 @@ import zipfile
 import numpy as np
 
 import foranav_colour as colours
-
 import foranav_features as features
 
 FORMAT_VERSION = 3
 DEFAULT_EDGE_THRESHOLD = 0.0  # the SVM's decision boundary (models built in code; training calibrates it)
 SVM_KINDS = ("linear",)
 _EPS_SCALE = 1000.0
-REQUIRED_KEYS = ("format_version", "species", "hog_config", "svm_kind", "svm_weights", "svm_bias",
-                 "edge_threshold", "colour_kind", "domain_names", "colour_vectors", "colour_bias", "frame_colour",
-                 "svm_threshold", "hs_threshold", "variance_threshold", "window_sizes", "window_margin",
-                 "reference_width", "crown_ratios", "seed", "notes", "provenance")
 # numpy dtype kinds each field may have: f float, i/u integer, U text
 FIELD_KINDS = {"format_version": "iu", "species": "U", "hog_config": "iu", "svm_kind": "U", "svm_weights": "fiu",
                "svm_bias": "fiu", "edge_threshold": "fiu", "colour_kind": "U", "domain_names": "U",
@@ -74,13 +66,12 @@ FIELD_KINDS = {"format_version": "iu", "species": "U", "hog_config": "iu", "svm_
                "reference_width": "iu", "crown_ratios": "fiu", "seed": "iu", "notes": "U", "provenance": "U"}
 SCALAR_FIELDS = ("format_version", "species", "svm_kind", "svm_bias", "edge_threshold", "colour_kind",
                  "window_margin", "reference_width", "seed", "notes", "provenance")
+REQUIRED_KEYS = tuple(FIELD_KINDS)
 COLOUR_LENGTH = 2 * colours.HS_BINS
 LFS_POINTER_PREFIX = b"version https://git-lfs"
 NPZ_MAGIC = b"PK\x03\x04"
 NPY_MAGIC = b"\x93NUMPY"
-SECOND_STAGE_KEYS = ("second_window", "second_weights", "second_bias", "second_threshold")
 SECOND_STAGE_KINDS = {"second_window": "iu", "second_weights": "fiu", "second_bias": "fiu", "second_threshold": "fiu"}
-CNN_KEYS = ("cnn_onnx", "cnn_side", "cnn_threshold")
 CNN_KINDS = {"cnn_onnx": "u", "cnn_side": "iu", "cnn_threshold": "fiu"}
 CNN_SIDES = (16, 128)  # smallest and largest input side a model may ask for
 
@@ -91,8 +82,8 @@ class ModelFormatError(ValueError):
 
 def current_hog_config():
     return np.array([features.HOG_WINDOW, features.HOG_CELL, features.HOG_BLOCK, features.HOG_BLOCK_STRIDE,
-                     features.HOG_BINS, features.ANGLE_LEVELS,
-                     int(round(features.BLOCK_NORM_EPS * _EPS_SCALE))], np.int32)
+                     features.HOG_BINS, features.ANGLE_LEVELS, int(round(features.BLOCK_NORM_EPS * _EPS_SCALE))],
+                    np.int32)
 
 
 class Domain(object):
@@ -415,21 +406,28 @@ def model_from_arrays(arrays, name="model"):
         raise ModelFormatError("%s: a field has the wrong type or shape (%s)" % (name, err))
 
 
+def _optional_stage(arrays, kinds, what, threshold_key, count):
+    """The fields of an optional stage, checked: all of `kinds` or none (None); its per-domain thresholds."""
+    present = [key for key in kinds if key in arrays]
+    if not present:
+        return None
+    if len(present) != len(kinds):
+        raise ModelFormatError("%s incomplete (missing %s)" % (what, ", ".join(k for k in kinds if k not in arrays)))
+    for key, allowed in kinds.items():
+        if arrays[key].dtype.kind not in allowed or (allowed == "u" and arrays[key].dtype.itemsize != 1):
+            raise ModelFormatError("field %s has the wrong type (%s)" % (key, arrays[key].dtype))
+    threshold = np.asarray(arrays[threshold_key], np.float64).ravel()
+    if threshold.shape != (count,):
+        raise ModelFormatError("%s must have one value per domain (%d)" % (threshold_key, count))
+    return list(threshold)
+
+
 def _second_stage(arrays, count):
     """The optional second stage's fields: all four keys or none (window None: no second stage)."""
-    present = [key for key in SECOND_STAGE_KEYS if key in arrays]
-    if not present:
+    threshold = _optional_stage(arrays, SECOND_STAGE_KINDS, "second stage", "second_threshold", count)
+    if threshold is None:
         return {"window": None, "weights": None, "bias": 0.0, "threshold": [0.0] * count, "kind": "hog",
                 "views": 1}
-    if len(present) != len(SECOND_STAGE_KEYS):
-        raise ModelFormatError("second stage incomplete (missing %s)"
-                               % ", ".join(k for k in SECOND_STAGE_KEYS if k not in arrays))
-    for key, kinds in SECOND_STAGE_KINDS.items():
-        if arrays[key].dtype.kind not in kinds:
-            raise ModelFormatError("field %s has the wrong type (%s)" % (key, arrays[key].dtype))
-    threshold = np.asarray(arrays["second_threshold"], np.float64).ravel()
-    if threshold.shape != (count,):
-        raise ModelFormatError("second_threshold must have one value per domain (%d)" % count)
     kind = arrays.get("second_kind", np.array("hog"))
     if kind.dtype.kind != "U" or kind.size != 1:
         raise ModelFormatError("field second_kind has the wrong type (%s)" % kind.dtype)
@@ -437,21 +435,14 @@ def _second_stage(arrays, count):
     if views.dtype.kind not in "iu" or views.size != 1:
         raise ModelFormatError("field second_views has the wrong type (%s)" % views.dtype)
     return {"window": int(arrays["second_window"]), "weights": arrays["second_weights"],
-            "bias": float(arrays["second_bias"]), "threshold": list(threshold), "kind": str(kind),
-            "views": int(views)}
+            "bias": float(arrays["second_bias"]), "threshold": threshold, "kind": str(kind), "views": int(views)}
 
 
 def _cnn_stage(arrays, count):
     """The optional network's fields: all three keys or none (onnx None: no network)."""
-    present = [key for key in CNN_KEYS if key in arrays]
-    if not present:
+    threshold = _optional_stage(arrays, CNN_KINDS, "network", "cnn_threshold", count)
+    if threshold is None:
         return {"onnx": None, "side": None, "threshold": [0.0] * count}
-    if len(present) != len(CNN_KEYS):
-        raise ModelFormatError("network incomplete (missing %s)" % ", ".join(k for k in CNN_KEYS if k not in arrays))
-    for key, kinds in CNN_KINDS.items():
-        if arrays[key].dtype.kind not in kinds or (key == "cnn_onnx" and arrays[key].dtype.itemsize != 1):
-            raise ModelFormatError("field %s has the wrong type (%s)" % (key, arrays[key].dtype))
-    threshold = np.asarray(arrays["cnn_threshold"], np.float64).ravel()
-    if threshold.shape != (count,) or arrays["cnn_side"].size != 1:
-        raise ModelFormatError("cnn_threshold must have one value per domain (%d), cnn_side one value" % count)
-    return {"onnx": arrays["cnn_onnx"], "side": int(arrays["cnn_side"]), "threshold": list(threshold)}
+    if arrays["cnn_side"].size != 1:
+        raise ModelFormatError("field cnn_side must be a single value")
+    return {"onnx": arrays["cnn_onnx"], "side": int(arrays["cnn_side"]), "threshold": threshold}
