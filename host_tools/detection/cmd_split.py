@@ -74,7 +74,8 @@ def read_tiles(csv_path: Path) -> dict[str, tuple[str, int, int, int, int]]:
         except ValueError:
             raise ForaNavError("%s: line %d: tile_y0, tile_x0, width and height must be integers" % (path, line_no))
         if len(row) != len(TILES_HEADER) or width <= 0 or height <= 0:
-            raise ForaNavError("%s: line %d: expected %s with a positive size" % (path, line_no, ",".join(TILES_HEADER)))
+            raise ForaNavError("%s: line %d: expected %s with a positive size"
+                               % (path, line_no, ",".join(TILES_HEADER)))
         tiles[PurePosixPath(row[0]).name] = (row[1].strip(), y0, x0, height, width)
     return tiles
 

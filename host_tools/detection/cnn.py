@@ -34,7 +34,7 @@ LEARNING_RATE = 3e-3
 WEIGHT_DECAY = 1e-4
 CHANNELS = (8, 16, 32, 32)  # the four 3x3 convolutions (the first three each followed by 2x2 max pooling)
 ONNX_OPSET = 13
-TRAINING_THREADS = 2  # the machine's two cores; fixed, so the same data and seed give the same network
+TRAINING_THREADS = 1  # fixed: same data and seed, same network (two threads spin-wait on a busy machine)
 
 Log = Callable[[str], None]
 
