@@ -3,6 +3,7 @@ import json
 
 import cv2
 import numpy as np
+import pytest
 
 import host_tools.detection  # noqa: F401
 import foranav_model
