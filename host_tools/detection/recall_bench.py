@@ -28,7 +28,7 @@ import math
 import numpy as np
 
 from host_tools.detection import common
-from host_tools.flight.vision_camera import MATCH_RADIUS_CROWN, VisionCamera, parse_detections
+from host_tools.flight.vision_camera import MATCH_RADIUS_CROWN, VisionCamera, model_option, parse_detections
 from host_tools.maps import PlantationMap, Tree
 from host_tools.sim.cli_args import appearance_from_args
 from host_tools.sim.crowns import AppearanceSpec
@@ -88,8 +88,8 @@ def _near(pixel, tree) -> bool:
 def measure(model: str, count: int = DEFAULT_COUNT, seed: int = 0, appearance: AppearanceSpec | None = None) -> dict:
     """{"cases": [CaseResult as dict], "by_crown_px": [...]} for the model (path or shipped species); appearance:
     the trees drawn from photo crowns (foranav bench recall --crowns CSV ...)."""
-    path = common.model_path(model)
     common.load(model)  # a missing or damaged file: one line, before any frame is rendered
+    path = model_option(common.model_path(model))  # absolute: the module joins a relative name to its folder
     cases, target_hits_by_px = [], []
     for index, (where, case) in enumerate(CASES):
         rng = np.random.default_rng([int(seed) & 0xFFFFFFFF, index])
