@@ -42,7 +42,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="sweep: flights per worker count (default 6); recall: frames per case (default 150)")
     parser.add_argument("--model", default=None,
                         help="recall: model file, or a shipped species (default: the shipped oil palm model)")
-    add_appearance_arguments(parser)  # bench sim: --crowns / --ground
+    add_appearance_arguments(parser)  # bench sim and recall: --crowns / --ground
     parser.add_argument("--plant", choices=PLANTS, default=None,
                         help="flight: also fly the firmware plant (beside the reduced plant)")
 

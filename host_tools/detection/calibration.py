@@ -19,6 +19,7 @@ MIN_RECALL = 0.97  # calibrated crop recall at least this (paper: 96.06 %)
 SVM_THRESHOLDS = (-1.5, -1.2, -1.0, -0.8, -0.6, -0.45, -0.3, -0.15, 0.0, 0.15, 0.3)
 CUE_QUANTILES = (0.0, 0.01, 0.02, 0.03, 0.05, 0.08, 0.12)
 SECOND_THRESHOLDS = (-1.0, -0.75, -0.5, -0.25, 0.0)  # second-stage thresholds searched (models with one)
+CNN_THRESHOLDS = (-3.0, -2.0, -1.0, 0.0, 1.0, 2.0)  # network logits searched (models with one)
 EDGE_THRESHOLDS = (-1.0, -0.5, 0.0, 0.5)  # candidates for the frame-edge test, searched on whole frames
 CROWN_RATIO_CENTRES = (0.9, 1.0, 1.1, 1.2, 1.3, 1.4, 1.5)  # window / crown, searched on whole survey frames
 CROWN_RATIO_SPREAD = (0.85, 1.0, 1.18)  # three window sizes around each centre (crowns vary in a frame)
@@ -48,9 +49,10 @@ def calibrate(model: TreeModel, domain_index: int, frames: Sequence[Frame], rng:
     cues = np.array([evaluation.frame_window_cues(model, domain_index, f, cx, cy, side)
                      for f, cx, cy, side, _positive in crops])
     scores, similarities, variances = cues[:, 0], cues[:, 1], cues[:, 2]
-    has_second = model.second_window is not None
-    seconds = np.array([evaluation.frame_second_score(model, f, cx, cy, side) if has_second else 0.0
-                        for f, cx, cy, side, _positive in crops])
+    has_second, has_cnn = model.second_window is not None, model.cnn_onnx is not None
+    later = [evaluation.frame_later_scores(model, f, cx, cy, side) for f, cx, cy, side, _positive in crops]
+    seconds = np.array([s if has_second else 0.0 for s, _logit in later])
+    logits = np.array([logit if has_cnn else 0.0 for _s, logit in later])
     best = None
     for svm in SVM_THRESHOLDS:
         for hs_q in CUE_QUANTILES:
@@ -60,19 +62,22 @@ def calibrate(model: TreeModel, domain_index: int, frames: Sequence[Frame], rng:
                 var = var if texture_cap is None else min(var, texture_cap)
                 first = detector_core.passes_thresholds(scores, similarities, variances, svm, hs, var)
                 for second in (SECOND_THRESHOLDS if has_second else (0.0,)):
-                    predicted = first & (seconds > second) if has_second else first
-                    recall = (predicted & labels).sum() / float(labels.sum())
-                    accuracy = 0.5 * (recall + (~predicted & ~labels).sum() / float((~labels).sum()))  # balanced
-                    key = (recall >= MIN_RECALL, accuracy, recall, -abs(svm), -abs(second))
-                    if best is None or key > best[0]:
-                        best = (key, svm, hs, var, second)
+                    for logit in (CNN_THRESHOLDS if has_cnn else (0.0,)):
+                        predicted = first & (seconds > second) if has_second else first
+                        predicted = predicted & (logits > logit) if has_cnn else predicted
+                        recall = (predicted & labels).sum() / float(labels.sum())
+                        accuracy = 0.5 * (recall + (~predicted & ~labels).sum() / float((~labels).sum()))  # balanced
+                        key = (recall >= MIN_RECALL, accuracy, recall, -abs(svm), -abs(second), -abs(logit))
+                        if best is None or key > best[0]:
+                            best = (key, svm, hs, var, second, logit)
     log("%s: calibration positives %d, negatives %d; positive SVM scores 2/5/10 %% quantiles %s"
         % (domain.name, labels.sum(), (~labels).sum(), np.round(np.percentile(scores[labels], [2, 5, 10]), 2)))
-    (_ok, accuracy, recall, _svm, _second), domain.svm_threshold, domain.hs_threshold, domain.variance_threshold, \
-        domain.second_threshold = best
-    log("%s: calibration on %d crops: accuracy %.3f recall %.3f at svm %.2f, colour %.3f, var %.4g%s"
-        % (domain.name, len(crops), accuracy, recall, domain.svm_threshold, domain.hs_threshold,
-           domain.variance_threshold, ", second stage %.2f" % domain.second_threshold if has_second else ""))
+    key, domain.svm_threshold, domain.hs_threshold, domain.variance_threshold, domain.second_threshold, \
+        domain.cnn_threshold = best
+    log("%s: calibration on %d crops: accuracy %.3f recall %.3f at svm %.2f, colour %.3f, var %.4g%s%s"
+        % (domain.name, len(crops), key[1], key[2], domain.svm_threshold, domain.hs_threshold,
+           domain.variance_threshold, ", second stage %.2f" % domain.second_threshold if has_second else "",
+           ", network %.2f" % domain.cnn_threshold if has_cnn else ""))
 
 
 def texture_cap(frames: Sequence[Frame], species: str, margin: float) -> float | None:
@@ -110,60 +115,73 @@ def calibrate_edge(model: TreeModel, imagery_frames: Sequence[tuple[str, Sequenc
         % (n_frames, model.edge_threshold, result["precision"], result["recall"], result["f1"]))
 
 
-def calibrate_frames(model: TreeModel, imagery_frames: Sequence[tuple[str, Sequence[Frame]]], log: Log) -> None:
+def calibrate_frames(model: TreeModel, imagery_frames: Sequence[tuple[str, Sequence[Frame]]], log: Log,
+                     frame_done: Callable[[], None] = lambda: None) -> None:
     """Whole-frame calibration on the held-back survey frames [(name, frames)]: the window/crown ratios
-    (shared) and each imagery's SVM threshold (the crop protocol's value or one of SVM_THRESHOLDS). Each
-    frame is scanned at its own typical crown size (as a user's --crown-px) and scored inside its annotated
-    area; the best mean frame F1 over the imageries wins, ties to the ratio nearest the training margin and
-    the crop protocol's threshold. Score maps do not depend on the threshold: one scan per frame and ratio."""
-    crop_thresholds = {d.name: d.svm_threshold for d in model.domains}
-    crop_seconds = {d.name: d.second_threshold for d in model.domains}
-    seconds = SECOND_THRESHOLDS if model.second_window is not None else (None,)
+    (shared) and each imagery's SVM threshold (the crop protocol's value or one of SVM_THRESHOLDS) with its
+    second-stage threshold, or, for a model with a network, its network threshold (the second stage's then
+    stays at the crop protocol's value). Each frame is scanned at its own typical crown size (as a user's
+    --crown-px) and scored inside its annotated area; the best mean frame F1 over the imageries wins, ties to
+    the ratio nearest the training margin and the crop protocol's thresholds. Score maps do not depend on the
+    thresholds: one scan per frame and ratio."""
     best = None
     for centre in CROWN_RATIO_CENTRES:
         model.crown_ratios = tuple(round(centre * spread, 4) for spread in CROWN_RATIO_SPREAD)
         chosen, f1s = {}, []
         for name, frames in imagery_frames:
-            candidates = [(t, t2) for t in sorted(set((crop_thresholds[name],) + SVM_THRESHOLDS))
-                          for t2 in (sorted(set((crop_seconds[name],) + seconds)) if seconds[0] is not None
-                                     else seconds)]
+            candidates = _frame_candidates(model, model.domain(name))
             counts = dict((t, [0, 0, 0]) for t in candidates)  # hits, false alarms, misses
             for frame in frames:
                 windows = evaluation.frame_window_sizes(model, frame, "boxes")
                 detector = detector_core.TreeDetector(model, detector_core.DetectorSettings(
                     window_sizes=windows, max_detections=None, domain=name))
-                maps = detector.score_maps(frame.value)  # once per frame; second-stage scores kept
-                for threshold in candidates:
-                    detector.settings.svm_threshold, detector.settings.second_threshold = threshold
+                maps = detector.score_maps(frame.value)  # once per frame; later stages' scores kept
+                for thresholds in candidates:
+                    settings = detector.settings
+                    settings.svm_threshold, settings.second_threshold, settings.cnn_threshold = thresholds
                     detections = [d for d in detector.detections_from_maps(maps, frame.hsv, frame.value)
                                   if frame.in_area(d.x, d.y)]
                     hits, false_alarms, misses = evaluation.match_detections(detections, frame.trees(model.species))
                     for i, n in enumerate((len(hits), len(false_alarms), len(misses))):
-                        counts[threshold][i] += n
-            scored = [(_f1(*counts[t]), -abs(t[0] - crop_thresholds[name]),
-                       -abs((t[1] or 0.0) - crop_seconds[name]), t) for t in candidates]
-            f1, _closeness, _second_closeness, chosen[name] = max(scored)
+                        counts[thresholds][i] += n
+                frame_done()
+            chosen[name] = max(candidates, key=lambda t: _f1(*counts[t]))  # the first of equals: nearest the crops'
+            f1 = _f1(*counts[chosen[name]])
             f1s.append(f1)
         key = (round(float(np.mean(f1s)), 6), -abs(centre - model.window_margin))
-        log("crown ratios %s: frame F1 %s at SVM thresholds %s"
+        log("crown ratios %s: frame F1 %s at thresholds %s"
             % (", ".join("%.2f" % r for r in model.crown_ratios), ", ".join("%.3f" % f for f in f1s),
                ", ".join(_thresholds_text(chosen[name]) for name, _frames in imagery_frames)))
         if best is None or key > best[0]:
             best = (key, model.crown_ratios, dict(chosen))
     _key, model.crown_ratios, chosen = best
-    for name, (threshold, second) in chosen.items():
-        model.domain(name).svm_threshold = threshold
-        if second is not None:
-            model.domain(name).second_threshold = second
-    log("frames: crown ratios %s, SVM thresholds %s (mean frame F1 %.3f)"
+    for name, (svm, second, logit) in chosen.items():
+        domain = model.domain(name)
+        domain.svm_threshold = svm
+        domain.second_threshold = domain.second_threshold if second is None else second
+        domain.cnn_threshold = domain.cnn_threshold if logit is None else logit
+    log("frames: crown ratios %s, thresholds %s (mean frame F1 %.3f)"
         % (", ".join("%.2f" % r for r in model.crown_ratios),
            ", ".join("%s %s" % (name, _thresholds_text(t)) for name, t in chosen.items()), best[0][0]))
 
 
+def _frame_candidates(model: TreeModel, domain) -> list[tuple]:
+    """(svm, second, network) thresholds to try on whole frames (None: the model has no such stage), those
+    nearest the crop protocol's first: max() over equal F1 then keeps the first."""
+    svms = sorted(set((domain.svm_threshold,) + SVM_THRESHOLDS), key=lambda t: abs(t - domain.svm_threshold))
+    seconds, logits = [None], [None]
+    if model.cnn_onnx is not None:
+        logits = sorted(set((domain.cnn_threshold,) + CNN_THRESHOLDS), key=lambda t: abs(t - domain.cnn_threshold))
+        seconds = [domain.second_threshold] if model.second_window is not None else [None]
+    elif model.second_window is not None:
+        seconds = sorted(set((domain.second_threshold,) + SECOND_THRESHOLDS),
+                         key=lambda t: abs(t - domain.second_threshold))
+    return [(svm, second, logit) for svm in svms for second in seconds for logit in logits]
+
+
 def _thresholds_text(thresholds):
-    """'-0.30' or '-0.30/-0.50' (SVM / second stage)."""
-    svm, second = thresholds
-    return "%.2f" % svm if second is None else "%.2f/%.2f" % (svm, second)
+    """'-0.30', '-0.30/-0.50' (SVM / second stage) or '-0.30/-0.50/1.00' (and network)."""
+    return "/".join("%.2f" % t for t in thresholds if t is not None)
 
 
 def _f1(hits: int, false_alarms: int, misses: int) -> float:

@@ -11,13 +11,18 @@ and PNGs: the share of positives and look-alikes passing each cue, per imagery, 
 to the model (--report). Same data and seed, same model file.
 """
 import argparse
+import io
 import os
+import sys
 from pathlib import Path
 
-from host_tools import fileio
-from host_tools.detection import dataset, evaluation, report, training
+from host_tools import annotations, fileio
+from host_tools.detection import cnn, dataset, evaluation, report, training
+from host_tools.detection.progress import Progress
 from host_tools.detection.threads import single_threaded
 from host_tools.errors import ForaNavError
+
+import foranav_colour as colours
 
 import foranav_features as features
 import foranav_model
@@ -38,7 +43,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="frame width the window sizes refer to (default %(default)s: the flight camera)")
     parser.add_argument("--margin", type=float, default=training.DEFAULT_MARGIN,
                         help="training window side / crown size (default %(default)s)")
-    parser.add_argument("--colour", choices=features.COLOUR_KINDS, default="templates",
+    parser.add_argument("--colour", choices=colours.COLOUR_KINDS, default="templates",
                         help="colour model per imagery: templates (hue/saturation correlation) or linear "
                         "(a classifier on the histograms); default %(default)s")
     parser.add_argument("--colour-templates", type=int, default=1, metavar="K",
@@ -50,6 +55,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         default=training.DEFAULT_SECOND_VIEWS,
                         help="the second stage scores the window as it is (1) or the mean HOG of its four "
                         "quarter turns (4); default %(default)s")
+    parser.add_argument("--cnn", action="store_true",
+                        help="survey models: add the learned stage, a small CNN each detection must also pass, run "
+                        "on the camera by OpenCV's dnn module (training needs PyTorch: pip install -e '.[train]')")
     parser.add_argument("--provenance", default="", metavar="TEXT",
                         help="sources and licences of the imagery, stored in the model file")
     parser.add_argument("--report", metavar="DIR", help="folder for report.md and its PNGs (default: MODEL "
@@ -106,9 +114,15 @@ def run(args: argparse.Namespace) -> int:
     if not args.data and not args.domain:
         raise ForaNavError("--data or --domain: give at least one boxes CSV")
     check_out(args.out)
+    if args.cnn:
+        cnn.torch_or_error()  # before the work, not after it
     named = imageries_from(args)
     crop_csvs = [p for p in args.data if evaluation.is_crops_csv(p)]
-    imageries = [training.Imagery(name, dataset.load_frames([path]), str(path)) for name, path in named]
+    progress = Progress(io.StringIO() if args.quiet else sys.stderr)
+    progress.plan([("loading images", sum(len(annotations.boxes_by_image(annotations.read_boxes(path)))
+                                          for _name, path in named), 1.0)])
+    imageries = [training.Imagery(name, dataset.load_frames([path], frame_done=lambda: progress.tick(
+        "loading images")), str(path)) for name, path in named]
     crops = [(dataset.read_image(path), positive) for csv_path in crop_csvs
              for path, positive, _category in evaluation.read_crops(csv_path)]
     log = (lambda message: None) if args.quiet else (lambda message: print("train: " + message, flush=True))
@@ -117,9 +131,10 @@ def run(args: argparse.Namespace) -> int:
                                reference_width=args.reference_width, margin=args.margin, log=log, crops=crops,
                                colour_kind=args.colour, colour_templates=args.colour_templates,
                                provenance=args.provenance, second_kind=args.second_stage,
-                               second_views=args.second_views)
+                               second_views=args.second_views, cnn=args.cnn, progress=progress)
     except ValueError as err:
         raise ForaNavError(str(err))
+    progress.finish()
     with fileio.atomic_path(args.out) as tmp:
         with open(str(tmp), "wb") as handle:
             foranav_model.save_model(model, handle)
@@ -131,7 +146,8 @@ def run(args: argparse.Namespace) -> int:
         log("report: %s" % written["path"])
     thresholds = "; ".join("%s svm %.2f colour %.3f var %.4g%s" % (
         d.name, d.svm_threshold, d.hs_threshold, d.variance_threshold,
-        "" if model.second_window is None else " second stage %.2f" % d.second_threshold) for d in model.domains)
+        "" if model.second_window is None else " second stage %.2f" % d.second_threshold)
+        + ("" if model.cnn_onnx is None else " network %.2f" % d.cnn_threshold) for d in model.domains)
     print("wrote %s: %s, svm bias %.3f, edge %.2f, crown ratios %s; %s"
           % (args.out, model.notes, model.svm_bias, model.edge_threshold,
              ",".join("%.2f" % r for r in model.crown_ratios), thresholds))

@@ -6,7 +6,7 @@ complete trees"). Windows are square, W = crown size x margin, given by centre a
 """
 import math
 import os
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -81,13 +81,15 @@ def read_image(path: str | os.PathLike) -> np.ndarray:
     return images.read_image(path)  # checked header: no huge allocations, truncated files refused
 
 
-def load_frames(csv_paths: Sequence[str | os.PathLike], limit: int | None = None) -> list[Frame]:
+def load_frames(csv_paths: Sequence[str | os.PathLike], limit: int | None = None,
+                frame_done: Callable[[], None] = lambda: None) -> list[Frame]:
     """Frames of one or more boxes CSVs (image paths relative to each CSV), in file order."""
     frames = []
     for csv_path in csv_paths:
         csv_path = Path(csv_path)
         for image, boxes in annotations.boxes_by_image(annotations.read_boxes(csv_path)).items():
             frames.append(Frame(str(csv_path.parent / image), read_image(csv_path.parent / image), boxes))
+            frame_done()
             if limit is not None and len(frames) >= limit:
                 return frames
     if not frames:

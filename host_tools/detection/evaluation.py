@@ -12,6 +12,7 @@ matched complete ground-truth box of the species (detections best first); precis
 centre error of the hits in pixels (what the flight app servos on).
 """
 import csv
+import functools
 import io
 import math
 import os
@@ -27,6 +28,8 @@ from host_tools.detection import dataset
 from host_tools.errors import ForaNavError
 
 import foranav_detector as detector_core
+import foranav_cnn
+import foranav_colour as colours
 import foranav_features as features
 from foranav_model import TreeModel
 
@@ -41,8 +44,8 @@ def window_cues(model: TreeModel, domain_index: int, value: np.ndarray, hsv: np.
     small = _downscale_crop(value) if small is None else small
     score = model.score(features.top_layer_hog(small))
     domain = model.domains[domain_index]
-    prepared = features.prepare_colour_vectors(model.colour_kind, domain.colour_vectors)
-    colour = features.colour_score(model.colour_kind, prepared, domain.colour_bias, *features.smoothed_hs(hsv))
+    prepared = colours.prepare_colour_vectors(model.colour_kind, domain.colour_vectors)
+    colour = colours.colour_score(model.colour_kind, prepared, domain.colour_bias, *colours.smoothed_hs(hsv))
     return score, colour, features.hog_texture(value)
 
 
@@ -55,35 +58,45 @@ def frame_window_cues(model: TreeModel, domain_index: int, frame: dataset.Frame,
 
 
 def passes(model: TreeModel, domain_index: int, cues: Cues, settings: dict | None = None,
-           second: float | None = None) -> bool:
+           later: tuple[float | None, float | None] = (None, None)) -> bool:
     """Does a window with these cues pass all three tests of the domain (settings override thresholds), and
-    the second stage (its score `second`) for a model with one?"""
+    the later stages (their scores `later`, see later_scores) the model has?"""
     detector = detector_core.TreeDetector(model, settings)
     detector.domain_index = domain_index
     score, colour, texture = cues
     ok = detector_core.passes_thresholds(score, colour, texture, *detector.thresholds())
+    second, logit = later
     if model.second_window is not None:
         ok = ok and second > detector.threshold("second_threshold")
+    if model.cnn_onnx is not None:
+        ok = ok and logit > detector.threshold("cnn_threshold")
     return ok
 
 
-def second_score(model: TreeModel, value_window: np.ndarray) -> float | None:
-    """The second stage's score of a full-resolution value window (None: the model has none)."""
-    if model.second_window is None:
-        return None
-    return model.second_score(value_window)
+@functools.lru_cache(maxsize=4)
+def _network(onnx: bytes, side: int) -> foranav_cnn.CnnStage:
+    return foranav_cnn.CnnStage(onnx, side)
 
 
-def frame_second_score(model: TreeModel, frame: dataset.Frame, cx: float, cy: float, side: float) -> float | None:
+def later_scores(model: TreeModel, value_window: np.ndarray,
+                 hsv_window: np.ndarray) -> tuple[float | None, float | None]:
+    """(second-stage score, network logit) of a full-resolution window; None for a stage the model lacks."""
+    second = None if model.second_window is None else model.second_score(value_window)
+    logit = None if model.cnn_onnx is None else _network(model.cnn_onnx, model.cnn_side).scores([hsv_window])[0]
+    return second, logit
+
+
+def frame_later_scores(model: TreeModel, frame: dataset.Frame, cx: float, cy: float,
+                       side: float) -> tuple[float | None, float | None]:
     rows, cols = dataset.pixel_window(frame, cx, cy, side)
-    return second_score(model, frame.value[rows, cols])
+    return later_scores(model, frame.value[rows, cols], frame.hsv[rows, cols])
 
 
 def classify_window(model: TreeModel, value: np.ndarray, hsv: np.ndarray, settings: dict | None = None,
                     small: np.ndarray | None = None, domain_index: int = 0) -> tuple[bool, float, float, float]:
     """(is_tree, svm score, colour score, texture) of one window (see window_cues)."""
     cues = window_cues(model, domain_index, value, hsv, small)
-    return (passes(model, domain_index, cues, settings, second_score(model, value)),) + tuple(cues)
+    return (passes(model, domain_index, cues, settings, later_scores(model, value, hsv)),) + tuple(cues)
 
 
 def nearest_domain(model: TreeModel, hsv: np.ndarray) -> int:
@@ -201,7 +214,7 @@ def evaluate_frame_crops(model: TreeModel, crops: Sequence[tuple], settings: dic
             domains[id(frame)] = _domain_index(model, settings, frame.hsv)
         cues = frame_window_cues(model, domains[id(frame)], frame, cx, cy, side)
         predictions.append(passes(model, domains[id(frame)], cues, settings,
-                                  frame_second_score(model, frame, cx, cy, side)))
+                                  frame_later_scores(model, frame, cx, cy, side)))
         labels.append(positive)
     return crop_metrics(labels, predictions)
 
@@ -232,7 +245,8 @@ def match_detections(detections: Sequence, truths: Sequence[Box]) -> tuple[list[
     return hits, false_positives, unmatched
 
 
-FUNNEL_STAGES = ("svm", "peak", "cap", "nms", "colour", "second", "texture")  # second: = colour without one
+# "cnn" and "second" count as the stage before them for a model without that stage
+FUNNEL_STAGES = ("svm", "peak", "cap", "nms", "colour", "cnn", "second", "texture")
 
 
 def frame_window_sizes(model: TreeModel, frame: dataset.Frame, crown_px: float | str | None) -> list[int] | None:
@@ -264,7 +278,7 @@ def _funnel(trace, truths, settings_threshold):
             x0, y0 = plan.window_origin(row, col)
             windows.append((0.0, x0 + plan.window / 2.0, y0 + plan.window / 2.0, plan.window))
     stages = {"svm": windows, "peak": trace["peaks"], "cap": trace["capped"], "nms": trace["nms"],
-              "colour": trace["colour"], "second": trace["second"]}
+              "colour": trace["colour"], "cnn": trace["cnn"], "second": trace["second"]}
     return {name: sum(1 for box in truths if centred(items, box)) for name, items in stages.items()}
 
 
@@ -324,7 +338,8 @@ def _with_windows(settings, windows):
         svm_threshold=settings.svm_threshold, variance_threshold=settings.variance_threshold,
         hs_threshold=settings.hs_threshold, window_sizes=windows, step=settings.step,
         nms_overlap=settings.nms_overlap, max_detections=settings.max_detections, smoothing=settings.smoothing,
-        edge_threshold=settings.edge_threshold, domain=settings.domain, second_threshold=settings.second_threshold)
+        edge_threshold=settings.edge_threshold, domain=settings.domain, second_threshold=settings.second_threshold,
+        cnn_threshold=settings.cnn_threshold)
     return copy
 
 

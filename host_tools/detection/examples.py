@@ -11,6 +11,7 @@ from host_tools.detection.dataset import Frame
 from host_tools.detection.svm import train_linear_svm
 
 import foranav_detector as detector_core
+import foranav_colour as colours
 import foranav_features as features
 from foranav_model import TreeModel
 
@@ -34,25 +35,25 @@ def colour_model(frames: Sequence[Frame], species: str, margin: float, kind: str
     windows (look-alikes, windows cutting a crown, background)."""
     histograms = []
     for frame, rows, cols in _windows(frames, margin, lambda label: label == species):
-        hue, sat = features.hs_histograms(features.colour_region(frame.hsv[rows, cols]))
+        hue, sat = colours.hs_histograms(colours.colour_region(frame.hsv[rows, cols]))
         histograms.append(np.concatenate([hue / hue.sum(), sat / sat.sum()]))
     if not histograms:
         raise ValueError("no complete '%s' trees whose window fits the frame" % species)
     if kind == "templates" and (templates <= 1 or len(histograms) <= templates):
-        total = np.zeros(2 * features.HS_BINS)
+        total = np.zeros(2 * colours.HS_BINS)
         for histogram in histograms:  # summed one by one in float64 (the mean is the same bytes every time)
             total += histogram
         return (total / len(histograms)).astype(np.float32)[None, :], 0.0
     histograms = np.array(histograms, np.float64)
     if kind == "templates":
         return _kmeans(histograms, templates, rng).astype(np.float32), 0.0
-    positive = [features.colour_feature(*features.smoothed_hs(frame.hsv[rows, cols]))
+    positive = [colours.colour_feature(*colours.smoothed_hs(frame.hsv[rows, cols]))
                 for frame, rows, cols in _windows(frames, margin, lambda label: label == species)]
     negative = []
     for frame in frames:
         for cx, cy, side in negative_windows(frame, species, margin, rng, survey):
             rows, cols = dataset.pixel_window(frame, cx, cy, side)
-            negative.append(features.colour_feature(*features.smoothed_hs(frame.hsv[rows, cols])))
+            negative.append(colours.colour_feature(*colours.smoothed_hs(frame.hsv[rows, cols])))
     if not negative:
         raise ValueError("a linear colour model needs other windows than trees in the imagery")
     weights, bias = train_linear_svm(np.vstack([positive, negative]),
@@ -254,8 +255,23 @@ def second_descriptor(frame: Frame, cx: float, cy: float, side: float, window: i
     return features.second_stage_descriptor(np.ascontiguousarray(crop), window, kind)
 
 
+class Representatives:
+    """first_stage_representatives of each frame for one model, computed once: the second stage and the network
+    learn from the same windows, and on a survey photo of a hundred crowns finding them is most of the work."""
+
+    def __init__(self, model: TreeModel):
+        self.model = model
+        self.found: dict[int, list[tuple]] = {}
+
+    def __call__(self, frame: Frame) -> list[tuple]:
+        if id(frame) not in self.found:
+            self.found[id(frame)] = first_stage_representatives(frame, self.model)
+        return self.found[id(frame)]
+
+
 def second_stage_examples(frames: Sequence[Frame], species: str, model: TreeModel, window: int, kind: str,
-                          rng: np.random.RandomState, survey: bool) -> tuple[np.ndarray, np.ndarray]:
+                          rng: np.random.RandomState, survey: bool,
+                          representatives: Representatives | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(descriptors, labels) of the second stage from one imagery's learning frames: the positives as the
     first stage's (augmented crowns), the first stage's negative windows and, on survey frames, the first
     stage's own false alarms: each group's best window above SECOND_STAGE_SCORE (colour and texture not
@@ -270,14 +286,24 @@ def second_stage_examples(frames: Sequence[Frame], species: str, model: TreeMode
             x.append(second_descriptor(frame, cx, cy, side, window, kind, rng.randint(8)))
             y.append(-1)
         if survey:
-            for _score, cx, cy, side in first_stage_false_alarms(frame, species, model):
+            for _score, cx, cy, side in first_stage_false_alarms(frame, species, model, representatives):
                 x.append(second_descriptor(frame, cx, cy, side, window, kind, rng.randint(8)))
                 y.append(-1)
     return np.array(x, np.float32).reshape(-1, features.second_stage_length(window, kind)), np.array(y)
 
 
-def first_stage_false_alarms(frame: Frame, species: str, model: TreeModel) -> list[tuple]:
-    """[(score, cx, cy, side)]: the first stage's group-best windows on a survey frame at its crown scale."""
+def first_stage_false_alarms(frame: Frame, species: str, model: TreeModel,
+                             representatives: Representatives | None = None) -> list[tuple]:
+    """[(score, cx, cy, side)]: the first stage's group-best windows on a survey frame at its crown scale, inside
+    its annotated area, that are not tree windows."""
+    found = representatives(frame) if representatives is not None else first_stage_representatives(frame, model)
+    return [c for c in found if frame.in_area(c[1], c[2])
+            and not dataset.is_tree_window(frame, species, c[1], c[2], c[3], model.window_margin, 0.25, 1.6)]
+
+
+def first_stage_representatives(frame: Frame, model: TreeModel) -> list[tuple]:
+    """[(score, cx, cy, side)]: the first stage's group-best windows (scoring above SECOND_STAGE_SCORE; colour
+    and the later tests not applied) on a survey frame at its crown scale."""
     crown = frame.typical_crown()
     sizes = sorted(set(max(features.HOG_WINDOW, int(round(crown * model.window_margin * spread)))
                        for spread in SECOND_STAGE_SPREAD))
@@ -289,5 +315,5 @@ def first_stage_false_alarms(frame: Frame, species: str, model: TreeModel) -> li
         variance_threshold=-1.0))
     trace = {}
     detector.detections_from_maps(detector.score_maps(frame.value), frame.hsv, frame.value, trace)
-    return [c for c in trace["nms"] if frame.in_area(c[1], c[2])
-            and not dataset.is_tree_window(frame, species, c[1], c[2], c[3], model.window_margin, 0.25, 1.6)]
+    return trace["nms"]
+

@@ -28,8 +28,10 @@ import math
 import numpy as np
 
 from host_tools.detection import common
-from host_tools.flight.vision_camera import MATCH_RADIUS_CROWN, VisionCamera, parse_detections
+from host_tools.flight.vision_camera import MATCH_RADIUS_CROWN, VisionCamera, model_option, parse_detections
 from host_tools.maps import PlantationMap, Tree
+from host_tools.sim.cli_args import appearance_from_args
+from host_tools.sim.crowns import AppearanceSpec
 
 DEFAULT_COUNT = 150  # frames per case
 CROWN_M = (0.30, 0.45)  # foranav plantation's --crown-m default
@@ -83,17 +85,18 @@ def _near(pixel, tree) -> bool:
     return math.hypot(pixel[0] - tree.u, pixel[1] - tree.v) <= MATCH_RADIUS_CROWN * tree.w
 
 
-def measure(model: str, count: int = DEFAULT_COUNT, seed: int = 0) -> dict:
-    """{"cases": [CaseResult as dict], "by_crown_px": [...]} for the model (path or shipped species)."""
-    path = common.model_path(model)
+def measure(model: str, count: int = DEFAULT_COUNT, seed: int = 0, appearance: AppearanceSpec | None = None) -> dict:
+    """{"cases": [CaseResult as dict], "by_crown_px": [...]} for the model (path or shipped species); appearance:
+    the trees drawn from photo crowns (foranav bench recall --crowns CSV ...)."""
     common.load(model)  # a missing or damaged file: one line, before any frame is rendered
+    path = model_option(common.model_path(model))  # absolute: the module joins a relative name to its folder
     cases, target_hits_by_px = [], []
     for index, (where, case) in enumerate(CASES):
         rng = np.random.default_rng([int(seed) & 0xFFFFFFFF, index])
         hits = neighbours = neighbour_hits = false_alarms = 0
         for _ in range(count):
             pmap = _scene(rng, case)
-            camera = VisionCamera(pmap, seed=int(rng.integers(2 ** 31)), model=path)
+            camera = VisionCamera(pmap, seed=int(rng.integers(2 ** 31)), model=path, appearance=appearance)
             frame = camera.render(_camera_pose(rng, where, pmap.altitude_m))
             detections = parse_detections(camera.process(frame.image), *FRAME_SIZE)
             complete = [t for t in frame.trees if t.complete]
@@ -114,17 +117,20 @@ def measure(model: str, count: int = DEFAULT_COUNT, seed: int = 0) -> dict:
         if chosen:
             by_px.append({"crown_px": [low, high], "frames": len(chosen), "target_recall": float(np.mean(chosen))})
     return {"model": path, "seed": int(seed), "frames_per_case": count,
+            "crowns": list(appearance.crowns) if appearance is not None else [],
             "cases": [dataclasses.asdict(c) for c in cases], "by_crown_px": by_px}
 
 
 def run(args: argparse.Namespace) -> int:
+    spec, _loaded = appearance_from_args(args, ("oil_palm",), "foranav bench recall")
     result = measure(getattr(args, "model", None) or "oil_palm", getattr(args, "count", None) or DEFAULT_COUNT,
-                     getattr(args, "seed", 0))
+                     getattr(args, "seed", 0), None if spec.default else spec)
     if getattr(args, "json", False):
         print(json.dumps({"recall": result}, indent=2))
         return 0
-    print("model %s, %d rendered frames per case, seed %d" % (result["model"], result["frames_per_case"],
-                                                              result["seed"]))
+    print("model %s, %d rendered frames per case, seed %d%s" % (
+        result["model"], result["frames_per_case"], result["seed"],
+        ", photo crowns from %s" % ", ".join(result["crowns"]) if result["crowns"] else ""))
     print("%-7s %-9s %15s %16s %18s" % ("camera", "case", "target recall", "neighbour recall",
                                         "false alarms/frame"))
     for c in result["cases"]:

@@ -19,6 +19,7 @@ import numpy as np
 
 from host_tools.sim.specimens import KINDS, render_specimen
 from host_tools.sim.world import NO_EFFECTS, SENSOR_EFFECTS, Effects
+from jevois_module.ForaNavTrees import foranav_colour as colours
 from jevois_module.ForaNavTrees import foranav_features as features  # the detector's definitions of the cues
 
 WINDOW_FACTOR = 1.3
@@ -54,7 +55,7 @@ def crops(kind: str, count: int, seed: int = 0, effects: Effects = NO_EFFECTS) -
 
 def oil_palm_template(count: int = 12, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """Mean hue and saturation histograms of oil-palm crops (the template I-T)."""
-    hists = [features.hs_histograms(features.bgr_to_hsv(c))
+    hists = [colours.hs_histograms(features.bgr_to_hsv(c))
              for c in crops("oil_palm", count, TEMPLATE_SEED_BASE + seed)]
     return np.mean([h for h, _ in hists], axis=0), np.mean([s for _, s in hists], axis=0)
 
@@ -69,7 +70,7 @@ def measure(kinds: Sequence[str], count_per_kind: int, seed: int = 0, template: 
         for crop in crops(kind, count_per_kind, seed, effects):
             hsv = features.bgr_to_hsv(crop)
             variances.append(features.hog_global_variance(hsv[..., 2]))
-            similarities.append(features.hs_similarity(hsv, template_h, template_s))
+            similarities.append(colours.hs_similarity(hsv, template_h, template_s))
         out[kind] = ClassStats(kind, len(variances), float(np.median(variances)), float(np.mean(variances)),
                                float(np.median(similarities)), float(np.mean(similarities)),
                                tuple(variances), tuple(similarities))
@@ -108,7 +109,7 @@ def measure_dataset(crops_csv: str | os.PathLike, template: tuple) -> dict[str, 
         for row in csv.DictReader(handle):
             hsv = features.bgr_to_hsv(cv2.imread(str(root / row["image"])))
             values.setdefault(row["category"], []).append(
-                (features.hog_global_variance(hsv[..., 2]), features.hs_similarity(hsv, *template)))
+                (features.hog_global_variance(hsv[..., 2]), colours.hs_similarity(hsv, *template)))
     out = {}
     for category in sorted(values, key=lambda c: (c != "oil_palm", c)):
         v, h = zip(*values[category])

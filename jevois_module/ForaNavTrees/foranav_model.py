@@ -35,30 +35,29 @@
 #   seed             int      training seed (provenance)
 #   notes            str      free text: data, counts, figures (provenance)
 #   provenance       str      sources and licences of the training imagery
-# Optional (all four or none; models trained on survey imagery): the second stage, a linear SVM on a finer
-# HOG, with or without the radial cue (foranav_features.second_stage_descriptor), that each group's best window
-# must also pass.
+# Optional (all four or none; survey models): the second stage, a linear SVM on a finer HOG and the radial cue
+# (foranav_features.second_stage_descriptor) that each group's best window must also pass.
 #   second_window    int      side of its downscaled window (48)
 #   second_weights   f32[n]   its weights (n = second_stage_length(second_window, second_kind))
 #   second_bias      f32
 #   second_threshold f32[D]   per domain, the score a detection's window must exceed
-#   second_kind      str      optional: "hog+radial" adds foranav_features.radial_descriptor to the HOG
-#                             (absent: "hog", the files written before it keep their bytes)
+#   second_kind      str      optional: "hog+radial" adds the radial cue to the HOG (absent: "hog")
 #   second_views     int      optional: 4 scores the mean HOG of the window's four quarter turns (absent: 1)
+# Optional (all three or none; `train --cnn`): the learned stage, a small network (foranav_cnn).
+#   cnn_onnx         u8[n]    the network in ONNX form (its bytes)
+#   cnn_side         int      side of its square input, pixels (foranav_cnn.CNN_SIDE)
+#   cnn_threshold    f32[D]   per domain, the logit a detection's window must exceed
 import zipfile
 
 import numpy as np
 
+import foranav_colour as colours
 import foranav_features as features
 
 FORMAT_VERSION = 3
 DEFAULT_EDGE_THRESHOLD = 0.0  # the SVM's decision boundary (models built in code; training calibrates it)
 SVM_KINDS = ("linear",)
 _EPS_SCALE = 1000.0
-REQUIRED_KEYS = ("format_version", "species", "hog_config", "svm_kind", "svm_weights", "svm_bias",
-                 "edge_threshold", "colour_kind", "domain_names", "colour_vectors", "colour_bias", "frame_colour",
-                 "svm_threshold", "hs_threshold", "variance_threshold", "window_sizes", "window_margin",
-                 "reference_width", "crown_ratios", "seed", "notes", "provenance")
 # numpy dtype kinds each field may have: f float, i/u integer, U text
 FIELD_KINDS = {"format_version": "iu", "species": "U", "hog_config": "iu", "svm_kind": "U", "svm_weights": "fiu",
                "svm_bias": "fiu", "edge_threshold": "fiu", "colour_kind": "U", "domain_names": "U",
@@ -67,12 +66,14 @@ FIELD_KINDS = {"format_version": "iu", "species": "U", "hog_config": "iu", "svm_
                "reference_width": "iu", "crown_ratios": "fiu", "seed": "iu", "notes": "U", "provenance": "U"}
 SCALAR_FIELDS = ("format_version", "species", "svm_kind", "svm_bias", "edge_threshold", "colour_kind",
                  "window_margin", "reference_width", "seed", "notes", "provenance")
-COLOUR_LENGTH = 2 * features.HS_BINS
+REQUIRED_KEYS = tuple(FIELD_KINDS)
+COLOUR_LENGTH = 2 * colours.HS_BINS
 LFS_POINTER_PREFIX = b"version https://git-lfs"
 NPZ_MAGIC = b"PK\x03\x04"
 NPY_MAGIC = b"\x93NUMPY"
-SECOND_STAGE_KEYS = ("second_window", "second_weights", "second_bias", "second_threshold")
 SECOND_STAGE_KINDS = {"second_window": "iu", "second_weights": "fiu", "second_bias": "fiu", "second_threshold": "fiu"}
+CNN_KINDS = {"cnn_onnx": "u", "cnn_side": "iu", "cnn_threshold": "fiu"}
+CNN_SIDES = (16, 128)  # smallest and largest input side a model may ask for
 
 
 class ModelFormatError(ValueError):
@@ -81,17 +82,18 @@ class ModelFormatError(ValueError):
 
 def current_hog_config():
     return np.array([features.HOG_WINDOW, features.HOG_CELL, features.HOG_BLOCK, features.HOG_BLOCK_STRIDE,
-                     features.HOG_BINS, features.ANGLE_LEVELS,
-                     int(round(features.BLOCK_NORM_EPS * _EPS_SCALE))], np.int32)
+                     features.HOG_BINS, features.ANGLE_LEVELS, int(round(features.BLOCK_NORM_EPS * _EPS_SCALE))],
+                    np.int32)
 
 
 class Domain(object):
     """One imagery's colour model and thresholds (see the module comment)."""
 
     def __init__(self, name, svm_threshold, hs_threshold, variance_threshold, colour_vectors, colour_bias=0.0,
-                 frame_colour=None, second_threshold=0.0):
+                 frame_colour=None, second_threshold=0.0, cnn_threshold=0.0):
         self.name = str(name)
         self.second_threshold = float(second_threshold)  # used only by a model with a second stage
+        self.cnn_threshold = float(cnn_threshold)  # used only by a model with a network
         self.svm_threshold = float(svm_threshold)
         self.hs_threshold = float(hs_threshold)
         self.variance_threshold = float(variance_threshold)
@@ -107,7 +109,7 @@ class Domain(object):
         if self.frame_colour.shape != (COLOUR_LENGTH,) or len(self.colour_vectors) == 0:
             raise ModelFormatError("domain %s: colour vectors must have %d values" % (self.name, COLOUR_LENGTH))
         values = [self.svm_threshold, self.hs_threshold, self.variance_threshold, self.colour_bias,
-                  self.second_threshold]
+                  self.second_threshold, self.cnn_threshold]
         if not (np.all(np.isfinite(values)) and np.all(np.isfinite(self.colour_vectors))
                 and np.all(np.isfinite(self.frame_colour))):
             raise ModelFormatError("domain %s: numbers must be finite" % self.name)
@@ -126,18 +128,18 @@ class TreeModel(object):
                  reference_width=352, seed=0, notes="", edge_threshold=DEFAULT_EDGE_THRESHOLD, domains=None,
                  colour_kind="templates", crown_ratios=None, provenance="", domain_name="default",
                  second_window=None, second_weights=None, second_bias=0.0, second_kind="hog",
-                 second_views=1):
+                 second_views=1, cnn_onnx=None, cnn_side=None):
         self.species = str(species)
         self.svm_weights = np.asarray(svm_weights, np.float32).ravel()
         self.svm_bias = float(svm_bias)
         self.edge_threshold = float(edge_threshold)
         self.colour_kind = str(colour_kind)
         if domains is None:
-            hue = np.ones(features.HS_BINS) if template_hue is None else template_hue
-            sat = np.ones(features.HS_BINS) if template_sat is None else template_sat
+            hue = np.ones(colours.HS_BINS) if template_hue is None else template_hue
+            sat = np.ones(colours.HS_BINS) if template_sat is None else template_sat
             hue, sat = np.asarray(hue, np.float32).ravel(), np.asarray(sat, np.float32).ravel()
-            if hue.shape != (features.HS_BINS,) or sat.shape != (features.HS_BINS,):
-                raise ModelFormatError("template_hue and template_sat must have %d bins" % features.HS_BINS)
+            if hue.shape != (colours.HS_BINS,) or sat.shape != (colours.HS_BINS,):
+                raise ModelFormatError("template_hue and template_sat must have %d bins" % colours.HS_BINS)
             domains = [Domain(domain_name, svm_threshold, hs_threshold, variance_threshold,
                               np.concatenate([hue, sat])[None, :])]
         self.domains = list(domains)
@@ -155,6 +157,8 @@ class TreeModel(object):
         self.second_bias = float(second_bias)
         self.second_kind = str(second_kind)
         self.second_views = int(second_views)
+        self.cnn_onnx = None if cnn_onnx is None else bytes(bytearray(np.asarray(cnn_onnx, np.uint8).ravel()))
+        self.cnn_side = None if cnn_side is None else int(cnn_side)
         self.validate()
 
     # The first domain's values (single-imagery models, the camera's settings, older callers).
@@ -164,8 +168,8 @@ class TreeModel(object):
                             lambda self, value: setattr(self.domains[0], "hs_threshold", float(value)))
     variance_threshold = property(lambda self: self.domains[0].variance_threshold,
                                   lambda self, value: setattr(self.domains[0], "variance_threshold", float(value)))
-    template_hue = property(lambda self: self.domains[0].colour_vectors[0, :features.HS_BINS])
-    template_sat = property(lambda self: self.domains[0].colour_vectors[0, features.HS_BINS:])
+    template_hue = property(lambda self: self.domains[0].colour_vectors[0, :colours.HS_BINS])
+    template_sat = property(lambda self: self.domains[0].colour_vectors[0, colours.HS_BINS:])
 
     def domain(self, name):
         """The domain of this name; ModelFormatError (naming the known ones) when there is none."""
@@ -184,9 +188,9 @@ class TreeModel(object):
             raise ModelFormatError("window_sizes must be non-empty and at least %d px" % features.HOG_WINDOW)
         if not self.species or len(self.species.split()) != 1:
             raise ModelFormatError("species must be one word")
-        if self.colour_kind not in features.COLOUR_KINDS:
+        if self.colour_kind not in colours.COLOUR_KINDS:
             raise ModelFormatError("colour_kind %r is not one of %s" % (self.colour_kind,
-                                                                      ", ".join(features.COLOUR_KINDS)))
+                                                                      ", ".join(colours.COLOUR_KINDS)))
         if not self.domains:
             raise ModelFormatError("a model needs at least one domain")
         names = [d.name for d in self.domains]
@@ -214,6 +218,10 @@ class TreeModel(object):
                                        % (self.second_weights.size, length))
             if not np.all(np.isfinite(self.second_weights)) or not np.isfinite(self.second_bias):
                 raise ModelFormatError("second-stage numbers must be finite")
+        if (self.cnn_onnx is None) != (self.cnn_side is None):
+            raise ModelFormatError("a network needs its ONNX bytes and its input side")
+        if self.cnn_onnx is not None and (not self.cnn_onnx or not CNN_SIDES[0] <= self.cnn_side <= CNN_SIDES[1]):
+            raise ModelFormatError("cnn_onnx must not be empty and cnn_side must be %d..%d px" % CNN_SIDES)
         values = [self.svm_bias, self.edge_threshold, self.window_margin] + list(self.svm_weights)
         values += list(self.crown_ratios)
         if (not np.all(np.isfinite(values)) or self.window_margin <= 0 or self.reference_width <= 0
@@ -241,6 +249,9 @@ class TreeModel(object):
                 arrays.update(second_kind=np.array(self.second_kind))
             if self.second_views != 1:
                 arrays.update(second_views=np.array(self.second_views, np.int32))
+        if self.cnn_onnx is not None:  # only then: a model without one keeps its bytes
+            arrays.update(cnn_onnx=np.frombuffer(self.cnn_onnx, np.uint8), cnn_side=np.array(self.cnn_side, np.int32),
+                          cnn_threshold=np.array([d.cnn_threshold for d in self.domains], np.float32))
         return arrays
 
     def _core_arrays(self):
@@ -377,9 +388,10 @@ def model_from_arrays(arrays, name="model"):
         if frame_colour.shape != (count, COLOUR_LENGTH):
             raise ModelFormatError("frame_colour must be (%d domains, %d)" % (count, COLOUR_LENGTH))
         second = _second_stage(arrays, count)
+        cnn = _cnn_stage(arrays, count)
         domains = [Domain(names[i], per_domain["svm_threshold"][i], per_domain["hs_threshold"][i],
                           per_domain["variance_threshold"][i], vectors[i], per_domain["colour_bias"][i],
-                          frame_colour[i], second["threshold"][i]) for i in range(count)]
+                          frame_colour[i], second["threshold"][i], cnn["threshold"][i]) for i in range(count)]
         return TreeModel(
             species=str(arrays["species"]), svm_weights=arrays["svm_weights"], svm_bias=float(arrays["svm_bias"]),
             edge_threshold=float(arrays["edge_threshold"]), colour_kind=str(arrays["colour_kind"]),
@@ -387,28 +399,35 @@ def model_from_arrays(arrays, name="model"):
             reference_width=int(arrays["reference_width"]), crown_ratios=arrays["crown_ratios"],
             seed=int(arrays["seed"]), notes=str(arrays["notes"]), provenance=str(arrays["provenance"]),
             second_window=second["window"], second_weights=second["weights"], second_bias=second["bias"],
-            second_kind=second["kind"], second_views=second["views"])
+            second_kind=second["kind"], second_views=second["views"], cnn_onnx=cnn["onnx"], cnn_side=cnn["side"])
     except ModelFormatError as err:
         raise ModelFormatError("%s: %s" % (name, err))
     except (TypeError, ValueError, IndexError) as err:
         raise ModelFormatError("%s: a field has the wrong type or shape (%s)" % (name, err))
 
 
+def _optional_stage(arrays, kinds, what, threshold_key, count):
+    """The fields of an optional stage, checked: all of `kinds` or none (None); its per-domain thresholds."""
+    present = [key for key in kinds if key in arrays]
+    if not present:
+        return None
+    if len(present) != len(kinds):
+        raise ModelFormatError("%s incomplete (missing %s)" % (what, ", ".join(k for k in kinds if k not in arrays)))
+    for key, allowed in kinds.items():
+        if arrays[key].dtype.kind not in allowed or (allowed == "u" and arrays[key].dtype.itemsize != 1):
+            raise ModelFormatError("field %s has the wrong type (%s)" % (key, arrays[key].dtype))
+    threshold = np.asarray(arrays[threshold_key], np.float64).ravel()
+    if threshold.shape != (count,):
+        raise ModelFormatError("%s must have one value per domain (%d)" % (threshold_key, count))
+    return list(threshold)
+
+
 def _second_stage(arrays, count):
     """The optional second stage's fields: all four keys or none (window None: no second stage)."""
-    present = [key for key in SECOND_STAGE_KEYS if key in arrays]
-    if not present:
+    threshold = _optional_stage(arrays, SECOND_STAGE_KINDS, "second stage", "second_threshold", count)
+    if threshold is None:
         return {"window": None, "weights": None, "bias": 0.0, "threshold": [0.0] * count, "kind": "hog",
                 "views": 1}
-    if len(present) != len(SECOND_STAGE_KEYS):
-        raise ModelFormatError("second stage incomplete (missing %s)"
-                               % ", ".join(k for k in SECOND_STAGE_KEYS if k not in arrays))
-    for key, kinds in SECOND_STAGE_KINDS.items():
-        if arrays[key].dtype.kind not in kinds:
-            raise ModelFormatError("field %s has the wrong type (%s)" % (key, arrays[key].dtype))
-    threshold = np.asarray(arrays["second_threshold"], np.float64).ravel()
-    if threshold.shape != (count,):
-        raise ModelFormatError("second_threshold must have one value per domain (%d)" % count)
     kind = arrays.get("second_kind", np.array("hog"))
     if kind.dtype.kind != "U" or kind.size != 1:
         raise ModelFormatError("field second_kind has the wrong type (%s)" % kind.dtype)
@@ -416,5 +435,14 @@ def _second_stage(arrays, count):
     if views.dtype.kind not in "iu" or views.size != 1:
         raise ModelFormatError("field second_views has the wrong type (%s)" % views.dtype)
     return {"window": int(arrays["second_window"]), "weights": arrays["second_weights"],
-            "bias": float(arrays["second_bias"]), "threshold": list(threshold), "kind": str(kind),
-            "views": int(views)}
+            "bias": float(arrays["second_bias"]), "threshold": threshold, "kind": str(kind), "views": int(views)}
+
+
+def _cnn_stage(arrays, count):
+    """The optional network's fields: all three keys or none (onnx None: no network)."""
+    threshold = _optional_stage(arrays, CNN_KINDS, "network", "cnn_threshold", count)
+    if threshold is None:
+        return {"onnx": None, "side": None, "threshold": [0.0] * count}
+    if arrays["cnn_side"].size != 1:
+        raise ModelFormatError("field cnn_side must be a single value")
+    return {"onnx": arrays["cnn_onnx"], "side": int(arrays["cnn_side"]), "threshold": threshold}

@@ -321,7 +321,7 @@ def test_that_a_reader_going_away_does_not_stop_training(tmp_path):
         os.close(write_end)
     # Assert
     assert proc.returncode == 0, proc.stderr
-    assert proc.stderr == ""
+    assert all(line.startswith("train [") for line in proc.stderr.splitlines()), proc.stderr  # the progress bar only
     assert model.stat().st_size > 0
 
 

@@ -6,6 +6,7 @@ import pytest
 
 import host_tools.detection  # noqa: F401
 import foranav_detector as detector_core
+import foranav_grouping as grouping
 import foranav_features as features
 from host_tools.detection import reference, synthetic
 
@@ -131,78 +132,17 @@ def test_that_the_paper_step_and_odd_window_sizes_still_detect(model, scenes):
     assert all(0 <= d.x <= 352 and 0 <= d.y <= 288 for d in detections)
 
 
-class _GridPlan(object):
-    """A score map's geometry for the peak tests: lattice positions 8 px apart, 96 px windows."""
-    window = 96
-
-    def window_origin(self, row, col):
-        return col * 8.0, row * 8.0
-
-
-def _score_map_with_peaks(peaks, shape=(12, 16), floor=-3.0):
-    scores = np.full(shape, floor, np.float32)
-    for (row, col), score in peaks.items():
-        scores[row, col] = score
-    return scores
-
-
-def test_that_a_weak_peak_on_the_score_map_border_is_dropped_but_a_strong_one_and_inner_ones_are_kept():
-    # Fixture: peaks at -0.5 on the border (a crown cut by the frame edge) and inside, 1.0 on the border.
-    scores = _score_map_with_peaks({(0, 5): -0.5, (6, 8): -0.5, (11, 2): 1.0, (4, 15): -0.2})
-    kept = detector_core._local_maxima(_GridPlan(), scores, -1.5, edge_threshold=0.0)
-    assert sorted(round(c[0], 2) for c in kept) == [-0.5, 1.0]
-    assert [(c[1], c[2]) for c in kept if c[0] < 0] == [(8 * 8 + 48, 6 * 8 + 48)]  # the inner peak
-    # without the edge rule every peak above the SVM threshold is a candidate
-    assert len(detector_core._local_maxima(_GridPlan(), scores, -1.5, edge_threshold=None)) == 4
-
-
-def test_that_a_window_centred_inside_an_accepted_crown_is_the_same_tree_but_a_neighbour_is_not():
-    accepted = [detector_core.Detection(150.0, 100.0, 129.0, 129.0, 1.2)]  # from a 168 px window (x 1.3)
-    side_window = (-0.7, 150.0, 145.0, 96.0)  # 45 px off the crown centre
-    neighbour = (-0.7, 150.0 + 129.0, 100.0, 168.0)  # one crown diameter away
-    assert detector_core._iou(side_window, (1.2, 150.0, 100.0, 168.0)) < detector_core.DEFAULT_NMS_OVERLAP
-    assert detector_core._inside_a_crown(side_window, accepted, 1.3)
-    assert not detector_core._inside_a_crown(neighbour, accepted, 1.3)
-
-
-def test_that_a_large_window_straddling_an_accepted_crown_and_the_gap_beside_it_is_that_crown():
-    # sweep flight 468 at 1.46 m: tree 2 found by a 120 px window, a 168 px window over its lower half and
-    # the gap towards tree 1 (IoU 0.28, under the NMS overlap) reported a tree between the two trees
-    accepted = [detector_core.Detection(180.0, 87.0, 92.3, 92.3, 0.16)]  # from a 120 px window (x 1.3)
-    straddling = (-1.42, 177.0, 153.0, 168.0)
-    assert detector_core._iou(straddling, (0.16, 180.0, 87.0, 120.0)) < detector_core.DEFAULT_NMS_OVERLAP
-    assert detector_core._inside_a_crown(straddling, accepted, 1.3)
-    # touching neighbours one size step apart (1.3 and 1.73 crowns, centres one crown apart) stay two trees
-    crown = 92.3
-    neighbour = (-1.42, 180.0, 87.0 + crown, 168.0)
-    assert not detector_core._inside_a_crown(neighbour, accepted, 1.3)
-
-
-def test_that_the_crown_sized_window_holding_an_off_centre_best_window_anchors_the_group():
-    # straight above a 0.45 m crown at 1.1 m (130 px): a 96 px window on its fronds 30 px off centre scored
-    # best; the 168 px window holding it, within SCALE_TIE, is centred on the crown
-    off_centre = (-0.70, 197.0, 121.0, 96.0)
-    crown_sized = (-0.72, 170.0, 151.0, 168.0)
-    elsewhere = (-0.71, 120.0, 200.0, 168.0)  # scores as well but does not hold the best window
-    group = [off_centre, elsewhere, crown_sized]
-    assert detector_core._anchored(group)[0] is crown_sized
-    assert sorted(map(id, detector_core._anchored(group))) == sorted(map(id, group))
-    # a larger window scoring much worse does not take over
-    weak = (-0.70 - 2 * detector_core.SCALE_TIE, 170.0, 151.0, 168.0)
-    assert detector_core._anchored([off_centre, weak])[0] is off_centre
-
-
 def _representative(model, group, accepted, hs_threshold):
     detector = detector_core.TreeDetector(model, detector_core.DetectorSettings(hs_threshold=hs_threshold))
     hsv = np.full((288, 352, 3), 100, np.uint8)  # the colour test's outcome comes from hs_threshold alone
-    return detector._representative_first(group, accepted, hsv, hs_threshold, None)
+    return detector.representative_first(group, accepted, hsv, hs_threshold, None)
 
 
 def test_that_an_anchor_dropped_as_a_neighbours_crown_leaves_the_crown_sized_window_it_holds(model):
     # sweep flight 6 at 1.35 m: tree 4 accepted from a 110 px window; the 168 px anchor of tree 3's group
     # reaches 32 px towards tree 4 and shares more than half of that window; the 96 px window it holds is on
     # tree 3 (95 px crown)
-    accepted = [detector_core.Detection(157.0, 59.0, 85.0, 85.0, 0.3)]
+    accepted = [grouping.Detection(157.0, 59.0, 85.0, 85.0, 0.3)]
     anchor = (-0.90, 170.0, 142.0, 168.0)
     crown_sized = (-1.09, 182.0, 174.0, 96.0)
     larger = (-1.15, 177.0, 171.0, 120.0)
@@ -215,5 +155,5 @@ def test_that_an_anchor_dropped_as_a_neighbours_crown_leaves_the_crown_sized_win
     assert _representative(model, [anchor, crown_sized], [], 2.0) is None
     # a held window inside the accepted crown too is not taken
     held_duplicate = (-1.1, 160.0, 66.0, 96.0)
-    assert detector_core._inside_a_crown(held_duplicate, accepted, model.window_margin)
+    assert grouping.inside_a_crown(held_duplicate, accepted, model.window_margin)
     assert _representative(model, [(-0.9, 160.0, 70.0, 168.0), held_duplicate], accepted, -2.0) is None

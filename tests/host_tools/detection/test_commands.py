@@ -3,6 +3,7 @@ import json
 
 import cv2
 import numpy as np
+import pytest
 
 import host_tools.detection  # noqa: F401
 import foranav_model
@@ -106,6 +107,9 @@ def test_that_the_benchmark_reports_every_figure_the_issue_asks_for():
     assert {"median_ms", "p90_ms", "fps", "speedup_vs_reference"} <= set(figures)
     assert figures["median_ms"] > 0 and figures["speedup_vs_reference"] > 1
     assert result["peak_rss_mb"] > 0
+    network = result["sizes"]["352x288 with network"]
+    for row in (figures, network):  # the A33 estimate: host CPU time x the measured factor
+        assert row["a33_ms"] == pytest.approx(row["cpu_median_ms"] * bench.A33_FACTOR, rel=0.01, abs=0.1)
 
 
 def crowded_scene(tmp_path, palms=14):
