@@ -41,7 +41,7 @@ from host_tools.sim.cli_args import appearance_from_args
 from host_tools.sweep import report as report_mod
 from host_tools.sweep.conditions import FAULT_PRESETS, preset
 from host_tools.sweep.runner import run_sweep
-from host_tools.sweep.specs import make_specs
+from host_tools.sweep.specs import make_specs, stored_ranges
 from host_tools.sweep.store import SweepStore
 
 PROGRESS_EVERY_S = 10.0  # without a terminal: one progress line this often
@@ -176,7 +176,7 @@ def run(args: argparse.Namespace) -> int:
         rows = store.rows()
         if not args.report_only:
             rows = [r for r in rows if r["index"] < args.count]
-    ranges = PlantationRanges(**{k: tuple(v) for k, v in identity.get("ranges", {}).items()})
+    ranges = stored_ranges(identity["ranges"]) if "ranges" in identity else PlantationRanges()
     report = report_mod.build_report(rows, args.out, identity={k: identity[k] for k in ("seed", "faults", "camera")
                                                                if k in identity}, ranges=ranges)
     if counts is not None:

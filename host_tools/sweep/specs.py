@@ -16,7 +16,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from host_tools.maps import map_to_dict
-from host_tools.plantation import PlantationRanges, generate
+from host_tools.plantation import DEFAULT_PROFILE, PROFILES, PlantationRanges, generate, profile_of
 from host_tools.sweep import conditions as cond
 
 SEED_LIMIT = 2 ** 31 - 1
@@ -49,14 +49,19 @@ def make_specs(count: int, sweep_seed: int, *, faults: str = "none", camera: str
 
 
 def ranges_arguments(ranges: PlantationRanges | None) -> list[str]:
-    """The ``foranav plantation`` options that give ``ranges`` (only those that differ from the defaults)."""
-    default = PlantationRanges()
-    args = []
-    for f in dataclasses.fields(PlantationRanges):
-        value = getattr(ranges, f.name)
-        if tuple(value) != tuple(getattr(default, f.name)):
-            args += ["--" + f.name.replace("_", "-"), "%s:%s" % tuple(value)]
+    """The ``foranav plantation`` options that give ``ranges``: the nearest profile (when not the default)
+    and the ranges that differ from it."""
+    profile, differing = profile_of(ranges)
+    args = [] if profile == DEFAULT_PROFILE else ["--profile", profile]
+    for name in differing:
+        args += ["--" + name.replace("_", "-"), "%s:%s" % tuple(getattr(ranges, name))]
     return args
+
+
+def stored_ranges(stored: dict) -> PlantationRanges:
+    """The ranges a sweep store recorded; a store from before the wide profile lacks the geometry ranges,
+    whose values were then the classic profile's."""
+    return dataclasses.replace(PROFILES["classic"], **{k: tuple(v) for k, v in stored.items()})
 
 
 def fly_command(spec: dict, map_path: str | os.PathLike) -> str:
