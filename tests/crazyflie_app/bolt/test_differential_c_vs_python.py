@@ -263,10 +263,28 @@ def test_that_the_c_core_drops_a_reached_tree_seen_again_as_the_python_core_does
     assert "tree_absorbed" in twins.event_kinds
 
 
+BEYOND_THE_ENDS = {"name": "beyond the ends", "altitude_m": 0.92,
+                   "waypoints": [[0.3, 0.0], [2.0, 0.0], [2.0, -1.5], [0.3, -1.5]],
+                   "trees": [{"id": 1, "x": 0.9, "y": 0.0, "species": "oil_palm", "crown_m": 0.4},
+                             {"id": 2, "x": 2.26, "y": 0.02, "species": "oil_palm", "crown_m": 0.4},
+                             {"id": 3, "x": 1.2, "y": -1.5, "species": "oil_palm", "crown_m": 0.35},
+                             {"id": 4, "x": 0.04, "y": -1.52, "species": "oil_palm", "crown_m": 0.4}]}
+
+
 def reached_map_trees(twins, pmap):
     """The map's trees the cores reached (the map tree nearest to each reached entry), sorted."""
     return sorted(min(pmap.trees, key=lambda t: math.hypot(t.x - e.x, t.y - e.y)).id
                   for e in twins.py.memory.visited if e.reached)
+
+
+def test_that_both_cores_fly_a_column_on_beyond_its_end_waypoint():
+    # issue 32: palms 0.26 m beyond a column's end waypoint, flown at 0.92 m, are whole in view only from
+    # 0.21 m before them: before the app flew each segment on beyond its waypoint, tree 2 was passed by and
+    # the app landed at the last waypoint without tree 4
+    pmap = map_from_dict(BEYOND_THE_ENDS, source="<beyond the ends>")
+    steps, phases, twins = fly_twins(pmap, seed=4, hide=False)
+    assert "DONE" in phases
+    assert reached_map_trees(twins, pmap) == [1, 2, 3, 4]
 
 
 TOUCHING = {"name": "touching", "altitude_m": 1.26, "waypoints": [[0.3, 0.0], [3.0, 0.0]],
