@@ -41,7 +41,7 @@ from host_tools.sim.cli_args import appearance_from_args
 from host_tools.sweep import report as report_mod
 from host_tools.sweep.conditions import FAULT_PRESETS, preset
 from host_tools.sweep.runner import run_sweep
-from host_tools.sweep.specs import make_specs, stored_ranges
+from host_tools.sweep.specs import make_specs, seed_role, stored_ranges
 from host_tools.sweep.store import SweepStore
 
 PROGRESS_EVERY_S = 10.0  # without a terminal: one progress line this often
@@ -186,6 +186,8 @@ def run(args: argparse.Namespace) -> int:
         print(json.dumps(report, indent=2))
     else:
         print(report_mod.headline(report))
+        if "seed" in identity:
+            print("seed %d: a %s seed (docs/sweeps.md)" % (identity["seed"], seed_role(int(identity["seed"]))))
         print("failures: " + (", ".join("%s %d" % kv for kv in report["failures"].items() if kv[1]) or "none"))
         if counts is not None:
             print("this run: %d flown, %d skipped (already stored), %.0f s" % (counts["flown"], counts["skipped"],

@@ -16,7 +16,7 @@ from pathlib import Path
 from host_tools import fileio
 from host_tools.plantation import PlantationRanges
 from host_tools.plotting import plt
-from host_tools.sweep.specs import fly_command, plantation_command
+from host_tools.sweep.specs import fly_command, plantation_command, seed_role
 
 Z95 = 1.959964
 WORST_SHOWN = 10
@@ -247,6 +247,9 @@ def markdown(report: dict) -> str:
     sweep = report["sweep"]
     if sweep:
         out += ["Sweep: " + ", ".join("%s %s" % (k, v) for k, v in sorted(sweep.items())), ""]
+    if "seed" in sweep:
+        out += ["Seed %s is a %s seed (docs/sweeps.md: only reporting seeds give reported rates)."
+                % (sweep["seed"], seed_role(int(sweep["seed"]))), ""]
     out += [headline(report), ""]
     out += ["Mean of the per-flight mean deviations: %s m; CPU per flight: %s s." % (
         _num(report["mean_of_flight_means_m"]), report["cpu_s_per_flight"]), ""]

@@ -20,6 +20,23 @@ from host_tools.plantation import DEFAULT_PROFILE, PROFILES, PlantationRanges, g
 from host_tools.sweep import conditions as cond
 
 SEED_LIMIT = 2 ** 31 - 1
+# Tuning seeds and reporting seeds (docs/sweeps.md): a rate that is reported comes from sweeps nobody looked
+# at while changing the app, the camera or the generator.
+TUNING_SWEEP_SEEDS = range(0, 1000)  # sweeps looked at while changing code
+REPORTING_SWEEP_SEEDS = range(1000, 2000)  # reported rates only, each seed once (ledger in docs/sweeps.md)
+TUNING_PLANTATION_SEEDS = range(0, 10_000)  # foranav plantation --seed in tests and examples
+
+
+def seed_role(sweep_seed: int) -> str:
+    """'tuning', 'reporting' or 'unassigned': what a sweep with this seed may be used for."""
+    if sweep_seed in TUNING_SWEEP_SEEDS:
+        return "tuning"
+    return "reporting" if sweep_seed in REPORTING_SWEEP_SEEDS else "unassigned"
+
+
+def plantation_seed(sweep_seed: int, index: int) -> int:
+    """The plantation seed of flight ``index`` of the sweep with ``sweep_seed`` (the first draw of its spec)."""
+    return int(np.random.default_rng([int(sweep_seed), int(index), 0x5EE9]).integers(0, SEED_LIMIT))
 
 
 def flight_spec(sweep_seed: int, index: int, *, faults: str = "none", camera: str = "sim",

@@ -268,7 +268,8 @@ CASES = [
       "--out", "keep.npz"], "--reference-width"),
     (["train", "--species", "oil_palm", "--data", "{in}/big_field.csv", "--margin", "1e300",
       "--out", "keep.npz"], "--margin"),
-    (["synth", "--out", "data", "--count", "2", "--ground", "{in}/empty.png"], "--ground"),
+    (["synth", "--out", "data", "--count", "2", "--ground", "{in}/empty.png", "--ground-gsd", "0.01"],
+     "empty.png: empty file"),
     # package, deploy
     (["package", "--out", "afile/x.jvpkg"], "--out"),
     (["package", "--out", "dir.jvpkg"], "--out"),
