@@ -52,8 +52,7 @@ def read_boxes(csv_path: str | os.PathLike) -> list[Box]:
     """Read a boxes CSV; raises ForaNavError naming the file and line on bad input (module docstring)."""
     csv_path = Path(csv_path)
     text = fileio.read_text(csv_path, "boxes CSV")
-    if "\x00" in text:
-        raise ForaNavError("%s: line %d: NUL bytes, not CSV text" % (csv_path, text.count("\n", 0, text.index("\x00")) + 1))
+    refuse_nul_bytes(text, csv_path)
     try:
         rows = list(csv.reader(io.StringIO(text)))
     except csv.Error as err:  # e.g. a field over csv.field_size_limit() (128 KiB)
@@ -76,6 +75,13 @@ def read_boxes(csv_path: str | os.PathLike) -> list[Box]:
     if not boxes:
         raise ForaNavError("%s: no rows" % csv_path)
     return boxes
+
+
+def refuse_nul_bytes(text: str, csv_path: str | os.PathLike) -> None:
+    """ForaNavError naming the line of the first NUL byte: a binary file, or one cut by a crash, is no CSV."""
+    if "\x00" in text:
+        line_no = text.count("\n", 0, text.index("\x00")) + 1
+        raise ForaNavError("%s: line %d: NUL bytes, not CSV text" % (csv_path, line_no))
 
 
 def _box(csv_path, line_no, row):

@@ -128,8 +128,8 @@ class PlantationRanges:
                                "column rule)" % (-overshoot, self.crown_m[0], self.lateral_jitter_m[1]))
         # a palm of the next column must be outside the app's rule around this column's segment, also where
         # the planting direction has turned (the columns are shifted copies: closer by cos(turn) there)
-        min_spacing = ((COLUMN_RULE_FACTOR * APP_CROWN_M + AMBIGUITY_MARGIN_M) / math.cos(math.radians(self.max_turn_deg))
-                       + self.lateral_jitter_m[1])
+        rule_and_margin = COLUMN_RULE_FACTOR * APP_CROWN_M + AMBIGUITY_MARGIN_M
+        min_spacing = rule_and_margin / math.cos(math.radians(self.max_turn_deg)) + self.lateral_jitter_m[1]
         if self.columns[1] > 1 and self.column_spacing_m[0] < min_spacing - 1e-9:
             raise ForaNavError("plantation range column_spacing_m: at least %.3f m (rule + margin + jitter%s)"
                                % (min_spacing, ", turns of %.0f deg" % self.max_turn_deg if self.max_turn_deg else ""))
@@ -368,7 +368,8 @@ def _fill_column(rng, ranges, d, layout, column, geometry, counts, gap_slots):
         if previous is not None and x - previous[0] < (previous[1] + crown) / 2.0:
             x = previous[0] + (previous[1] + crown) / 2.0  # never overlapping
         wx, wy = warp(x, y + jitter)
-        while previous is not None and math.hypot(wx - previous[3], wy - previous[4]) < (previous[1] + crown) / 2.0 - 1e-9:
+        touching_m = (previous[1] + crown) / 2.0 - 1e-9 if previous is not None else 0.0
+        while previous is not None and math.hypot(wx - previous[3], wy - previous[4]) < touching_m:
             # across a bend the crowns come closer than along the column (never on a straight column)
             x += 0.005
             wx, wy = warp(x, y + jitter)
@@ -437,7 +438,8 @@ def _check_unambiguous(trees, waypoints):
             continue
         distance = distance_to_path(tree.x, tree.y, waypoints)
         inner, outer = min(_rule_m(tree.crown_m)), max(_rule_m(tree.crown_m))
-        if not (distance <= inner - AMBIGUITY_MARGIN_M + ROUNDING_SLACK_M or distance >= outer + AMBIGUITY_MARGIN_M - 1e-6):
+        inside = distance <= inner - AMBIGUITY_MARGIN_M + ROUNDING_SLACK_M
+        if not (inside or distance >= outer + AMBIGUITY_MARGIN_M - 1e-6):
             raise AssertionError("plantation: tree %d at %.3f m from the path is ambiguous" % (tree.id, distance))
 
 

@@ -22,7 +22,7 @@ import cv2
 import numpy as np
 
 from host_tools import fileio
-from host_tools.annotations import Box
+from host_tools.annotations import Box, refuse_nul_bytes
 from host_tools.detection import dataset
 from host_tools.errors import ForaNavError
 
@@ -125,8 +125,7 @@ def read_crops(csv_path: str | os.PathLike) -> list[tuple[str, bool, str]]:
     """[(image path, is positive, category)] of a crops CSV."""
     csv_path = Path(csv_path)
     text = fileio.read_text(csv_path, "crops CSV")
-    if "\x00" in text:
-        raise ForaNavError("%s: line %d: NUL bytes, not CSV text" % (csv_path, text.count("\n", 0, text.index("\x00")) + 1))
+    refuse_nul_bytes(text, csv_path)
     try:
         rows = list(csv.reader(io.StringIO(text)))
     except csv.Error as err:  # e.g. a field over csv.field_size_limit() (128 KiB)

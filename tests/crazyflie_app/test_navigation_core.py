@@ -46,7 +46,8 @@ class World(object):
 
     def frame(self):
         dets = []
-        r = 0.0 if self.whole_crowns_m is None else self.whole_crowns_m / 2 * self.params.focal_px / self.params.altitude_m
+        px_per_m = self.params.focal_px / self.params.altitude_m
+        r = 0.0 if self.whole_crowns_m is None else self.whole_crowns_m / 2 * px_per_m
         for i, (tx, ty) in enumerate(self.trees):
             u, v = self.pixel(tx, ty)
             if i not in self.hidden and r <= u <= 352 - r and r <= v <= 288 - r:
