@@ -99,7 +99,7 @@ class NavigationCore:
         ids = self.frames.take(t_ms, detections, points, (pose_now.x, pose_now.y), self.events,
                                lambda: self.target_id, self._evicted,
                                lambda t, det: self._measure_target(t, det, pose_capture, pose_now))
-        for gone, twin in self.memory.absorb_reached(self.params.duplicate_radius_m):
+        for gone, twin in self.memory.absorb_reached(self.params.duplicate_radius_m, t_ms, (pose_now.x, pose_now.y)):
             self.events.append(Event("tree_absorbed", t_ms, gone, detail="reached tree %d" % twin))
             if gone == self.target_id:
                 self._drop_target()

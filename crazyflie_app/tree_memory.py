@@ -21,7 +21,12 @@ frame (two detector windows closer than ``app.dupRadius``) is merged by the core
 A stored tree whose position comes within ``app.dupRadius`` of a tree already reached is that tree, seen
 again from a drifted estimate (flow) or through an off-centre window on a crown cut by the frame edge: it
 is dropped from T_d (``absorb_reached``, counted in ``absorbed``) instead of being approached and reached a
-second time, and an abandoned tree within that distance of a reached one is not gone back for.
+second time, and an abandoned tree within that distance of a reached one is not gone back for. The dropped
+tree stays in the visited list, not reached, at the reached tree's position: a frame that detects the crown
+and its second window (or a neighbour taken for it) sends the second detection there instead of storing it
+again. Without that entry a crown touching a reached one, whose estimate windows over both crowns had pulled
+within ``app.dupRadius``, was dropped while approached, stored again at the next frame that saw both,
+approached, dropped... until the 900 s limit (issue 32).
 """
 import math
 from collections.abc import Collection, Iterable, Sequence
@@ -134,16 +139,18 @@ class TreeMemory:
         t.y += weight * (y - t.y)
         t.last_ms, t.u, t.v = t_ms, u, v
 
-    def absorb_reached(self, radius: float) -> list[tuple[int, int]]:
-        """Drop every stored tree within ``radius`` of a reached visited entry (the same tree seen again);
-        returns [(dropped id, reached id)]."""
+    def absorb_reached(self, radius: float, t_ms: int, mav_xy: Point) -> list[tuple[int, int]]:
+        """Drop every stored tree within ``radius`` of a reached visited entry (the same tree seen again) into
+        the visited list, not reached, at that entry's position (module docstring); returns [(dropped id,
+        reached id)]."""
         dropped = []
-        reached = [e for e in self.visited if e.reached]
         for t in list(self.trees.values()):
-            twin = next((e for e in reached if math.hypot(t.x - e.x, t.y - e.y) <= radius), None)
+            twin = next((e for e in self.visited if e.reached and math.hypot(t.x - e.x, t.y - e.y) <= radius),
+                        None)
             if twin is not None:
                 del self.trees[t.id]
                 self.absorbed += 1
+                self._append_visited(VisitedTree(t.id, twin.x, twin.y, t_ms, reached=False), mav_xy)
                 dropped.append((t.id, twin.id))
         return dropped
 
@@ -157,11 +164,15 @@ class TreeMemory:
         """Move a tree from T_d to the visited list (reached, or abandoned when reached is False; ``revisit``
         flags an abandoned tree worth going back for once)."""
         t = self.trees.pop(tree_id)
+        self._append_visited(VisitedTree(t.id, t.x, t.y, t_ms, reached, revisit), mav_xy)
+        return t
+
+    def _append_visited(self, entry: VisitedTree, mav_xy: Point) -> None:
+        """Append to the visited list; a full list forgets its entry farthest from the MAV first."""
         while len(self.visited) >= self.visited_capacity:
             self.visited.remove(self._farthest(self.visited, mav_xy))
             self.visited_forgotten += 1
-        self.visited.append(VisitedTree(t.id, t.x, t.y, t_ms, reached, revisit))
-        return t
+        self.visited.append(entry)
 
     def restore(self, tree_id: int, hits: int, u: float, v: float,
                 mav_xy: Point) -> tuple[StoredTree | None, list[int]]:

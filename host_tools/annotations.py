@@ -7,6 +7,12 @@ Same format as ``shared/data/real/*/boxes.csv``: one row per annotated tree, in 
 
 ``image`` is relative to the CSV's folder. An image with no trees (a pure negative frame) is listed with an
 empty label and zero-size box so that it is still part of the data set.
+
+``read_boxes`` refuses, naming the file and line: NUL bytes (a binary file, or one cut by a crash, is not CSV
+text), a header other than the one above, a row without six fields, box fields that are not finite numbers,
+a negative size, a centre or size beyond ``MAX_BOX_PX`` (no image we read is that large:
+host_tools.images.MAX_IMAGE_PIXELS) and a box listed twice for the same image (a duplicated row would count
+one tree twice in training and evaluation).
 """
 import csv
 import io
@@ -20,6 +26,7 @@ from host_tools.errors import ForaNavError
 from host_tools import fileio
 
 HEADER = ("image", "x_center", "y_center", "width", "height", "label")
+MAX_BOX_PX = 65536.0  # a centre or size beyond this many pixels is no box of an image we can read
 
 
 @dataclass(frozen=True)
@@ -42,33 +49,55 @@ class Box:
 
 
 def read_boxes(csv_path: str | os.PathLike) -> list[Box]:
-    """Read a boxes CSV; raises ForaNavError naming the file and row on bad input."""
+    """Read a boxes CSV; raises ForaNavError naming the file and line on bad input (module docstring)."""
     csv_path = Path(csv_path)
     text = fileio.read_text(csv_path, "boxes CSV")
+    refuse_nul_bytes(text, csv_path)
     try:
         rows = list(csv.reader(io.StringIO(text)))
-    except csv.Error as err:  # e.g. a field over csv.field_size_limit() (128 KiB), a NUL byte
+    except csv.Error as err:  # e.g. a field over csv.field_size_limit() (128 KiB)
         raise ForaNavError("%s: not a valid CSV: %s" % (csv_path, err))
     if not rows:
         raise ForaNavError("%s: empty CSV (expected header %s)" % (csv_path, ",".join(HEADER)))
     if tuple(h.strip() for h in rows[0]) != HEADER:
         raise ForaNavError("%s: header must be %s" % (csv_path, ",".join(HEADER)))
-    boxes = []
+    boxes, first_line = [], {}
     for line_no, row in enumerate(rows[1:], start=2):
         if not row:
             continue
-        if len(row) != len(HEADER):
-            raise ForaNavError("%s: line %d: expected %d fields, got %d" % (csv_path, line_no, len(HEADER), len(row)))
-        try:
-            values = [float(v) for v in row[1:5]]
-        except ValueError:
-            raise ForaNavError("%s: line %d: box fields must be numbers" % (csv_path, line_no))
-        if not all(math.isfinite(v) for v in values) or values[2] < 0 or values[3] < 0:
-            raise ForaNavError("%s: line %d: box must be finite with non-negative size" % (csv_path, line_no))
-        boxes.append(Box(row[0], *values, row[5].strip()))
+        box = _box(csv_path, line_no, row)
+        key = (box.image, box.x_center, box.y_center, box.width, box.height)
+        if key in first_line:
+            raise ForaNavError("%s: line %d: the same box of %s as line %d (a duplicated row)"
+                               % (csv_path, line_no, box.image, first_line[key]))
+        first_line[key] = line_no
+        boxes.append(box)
     if not boxes:
         raise ForaNavError("%s: no rows" % csv_path)
     return boxes
+
+
+def refuse_nul_bytes(text: str, csv_path: str | os.PathLike) -> None:
+    """ForaNavError naming the line of the first NUL byte: a binary file, or one cut by a crash, is no CSV."""
+    if "\x00" in text:
+        line_no = text.count("\n", 0, text.index("\x00")) + 1
+        raise ForaNavError("%s: line %d: NUL bytes, not CSV text" % (csv_path, line_no))
+
+
+def _box(csv_path, line_no, row):
+    if len(row) != len(HEADER):
+        raise ForaNavError("%s: line %d: expected %d fields, got %d" % (csv_path, line_no, len(HEADER), len(row)))
+    try:
+        values = [float(v) for v in row[1:5]]
+    except ValueError:
+        raise ForaNavError("%s: line %d: box fields must be numbers" % (csv_path, line_no))
+    if not all(math.isfinite(v) for v in values) or values[2] < 0 or values[3] < 0:
+        raise ForaNavError("%s: line %d: box must be finite with non-negative size" % (csv_path, line_no))
+    for name, value in zip(HEADER[1:5], values):
+        if abs(value) > MAX_BOX_PX:
+            raise ForaNavError("%s: line %d: %s %g px is beyond any image (at most %d px)"
+                               % (csv_path, line_no, name, value, MAX_BOX_PX))
+    return Box(row[0], *values, row[5].strip())
 
 
 def boxes_by_image(boxes: Iterable[Box]) -> dict[str, list[Box]]:

@@ -1,7 +1,10 @@
 """Write a random plantation map: serpentine planting columns with gaps, clusters, look-alike species,
 off-column oil palms, roofs and road crossings, and a flight height, all drawn from ranges by one seed.
 
-Every range option takes LO:HI (or one value); the defaults are listed with each option. Oil palms are
+Two profiles: wide (the default: bent, staggered, turned columns 1-5 m apart, 2-8+ trees a column, crowns
+0.28-0.47 m, flown at 0.9-1.5 m) and classic (the first generator's straight columns along +x: a seed gives
+the map it gave before the wide profile existed). Every range option takes LO:HI (or one value) and
+overrides the profile's range; the defaults of both profiles are listed with each option. Oil palms are
 never placed where the planting-column rule is ambiguous: a palm in a column lies at least 0.15 m inside
 both the map's rule (1.5 x its crown) and the app's (1.5 x app.crownSize 0.35 m); an off-column palm at
 least 0.15 m outside both (see host_tools/plantation.py).
@@ -12,6 +15,7 @@ and options, same bytes.
 Examples:
   foranav plantation --seed 7 --out runs/p7.json
   foranav plantation --seed 7 --columns 3 --altitude-m 1.0 --off-column-palms 2 --out p.json
+  foranav plantation --seed 7 --profile classic --out p.json      # the map seed 7 gave before
   foranav fly --map runs/p7.json --camera oracle
 """
 import argparse
@@ -21,20 +25,24 @@ import re
 
 from host_tools import argtypes, fileio
 from host_tools.errors import ForaNavError
-from host_tools.plantation import INTEGER_RANGES, PlantationRanges, generate, plantation_dict
+from host_tools.plantation import (DEFAULT_PROFILE, INTEGER_RANGES, PROFILES, PlantationRanges, generate,
+                                   plantation_dict)
 
 
 def add_range_arguments(parser: argparse.ArgumentParser) -> None:
-    """One --<range> option per PlantationRanges field (LO:HI or a value)."""
-    defaults = PlantationRanges()
+    """--profile, and one --<range> option per PlantationRanges field (LO:HI or a value)."""
+    parser.add_argument("--profile", choices=sorted(PROFILES), default=DEFAULT_PROFILE,
+                        help="the ranges the options below override (default %s; classic: the first "
+                             "generator's maps, seed for seed)" % DEFAULT_PROFILE)
     for f in dataclasses.fields(PlantationRanges):
-        lo, hi = getattr(defaults, f.name)
+        lo, hi = getattr(PROFILES[DEFAULT_PROFILE], f.name)
+        classic = "%s:%s" % getattr(PROFILES["classic"], f.name)
         parser.add_argument("--" + f.name.replace("_", "-"), metavar="LO:HI", default=None,
-                            help="range of %s (default %s:%s)" % (f.name, lo, hi))
+                            help="range of %s (default %s:%s; classic %s)" % (f.name, lo, hi, classic))
 
 
 def ranges_from_args(args: argparse.Namespace) -> PlantationRanges:
-    """PlantationRanges with the given options applied (ForaNavError naming a bad option)."""
+    """The profile's PlantationRanges with the given options applied (ForaNavError naming a bad option)."""
     overrides = {}
     for f in dataclasses.fields(PlantationRanges):
         text = getattr(args, f.name, None)
@@ -51,7 +59,7 @@ def ranges_from_args(args: argparse.Namespace) -> PlantationRanges:
             raise ForaNavError("%s: expected LO:HI or one value, got %r" % (option, text))
         overrides[f.name] = (parts[0], parts[-1])
     try:
-        return PlantationRanges().with_overrides(**overrides)
+        return PROFILES[getattr(args, "profile", DEFAULT_PROFILE)].with_overrides(**overrides)
     except ForaNavError as err:  # name the option, not the field
         raise ForaNavError(re.sub(r"^plantation ranges?:? ?(\w+)?",
                                   lambda m: "--" + m.group(1).replace("_", "-") if m.group(1) else "ranges",

@@ -3,7 +3,7 @@
 ``cv2.imread`` returns None for a file it cannot read (which says nothing of why), tries to allocate whatever a
 PNG or JPEG header claims (a 40-byte file can claim 30000 x 30000 pixels), and decodes a truncated JPEG with
 only a warning on stderr, returning the missing part as grey. ``read_image`` reads the header first and
-refuses, with one ForaNavError line naming the file: a file that is missing or not an image, dimensions above
+refuses, with one ForaNavError line naming the file: a file that is missing, empty or not an image, dimensions above
 ``MAX_IMAGE_PIXELS``, a PNG without its end chunk or a JPEG whose last scan has no end marker (truncated).
 """
 import struct
@@ -83,8 +83,13 @@ def read_image(path: str | Path) -> np.ndarray:
         raise ForaNavError("%s: cannot read image: %s" % (path, err.strerror or err))
     if len(data) > MAX_IMAGE_BYTES:
         raise ForaNavError("%s: image file larger than %d MiB" % (path, MAX_IMAGE_BYTES // (1024 * 1024)))
+    if not data:
+        raise ForaNavError("%s: empty file (0 bytes), not an image" % path)
     check_image_bytes(data, str(path))
-    image = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_COLOR)
+    try:
+        image = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_COLOR)
+    except cv2.error:  # OpenCV asserts on some damaged files instead of returning None
+        image = None
     if image is None:
         raise ForaNavError("%s: not an image OpenCV can decode" % path)
     return image

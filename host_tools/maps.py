@@ -6,12 +6,14 @@ counter-clockwise seen from above.
 A map is a JSON object:
 
     name            str      free text
-    altitude_m      number   flight height above ground (> 0)
+    altitude_m      number   flight height above ground, ALTITUDE_RANGE_M (0.4 .. 4.5 m)
     waypoints       [[x, y], ...]   the flight path F: start and end of each planting column, flown in order (>= 2)
     trees           [{id, x, y, species, crown_m, target?}, ...]
     objects         [{kind, x, y, size_m, yaw_deg}, ...]       optional look-alikes: roof, road_cross
     seed            int      optional: ground texture and per-tree variation (default 0)
     target_species  str      optional: the species the mission targets (default oil_palm)
+
+Coordinates lie within +-MAX_COORDINATE_M (1000 m), crown_m and size_m are at most MAX_SIZE_M (5 m).
 
 ``target`` is ground truth for scoring only (the flight app never reads it). When absent it is true iff the
 species is the target species and the tree lies within ``COLUMN_RULE_FACTOR`` x ``crown_m`` of a path segment
@@ -37,6 +39,13 @@ BUILTIN_DIR = Path(__file__).resolve().parent / "data" / "maps"
 MAX_SEED = 2 ** 32 - 1  # numpy's RandomState takes seeds up to this
 Point = tuple[float, float]  # (x, y), m
 MAX_INTEGER_NUMBER = 10 ** 15  # an integer beyond this in a map is a typo (and beyond 1e308 float() fails)
+# The flight heights a map may state (m). The camera sees 0.0031 m per pixel per metre of height (352x288):
+# below 0.4 m an app.crownSize crown (0.35 m) no longer fits the 288-px frame height, so the app cannot centre
+# on it; above 4.5 m it spans fewer than the detector's smallest window (24 px). Refused outside (a map with
+# 1e6 m made the simulator allocate terabytes and the app climb until the 900 s limit).
+ALTITUDE_RANGE_M = (0.4, 4.5)
+MAX_COORDINATE_M = 1000.0  # |x|, |y| of a waypoint, tree or object: at 0.1 m/s further is hours of flight
+MAX_SIZE_M = 5.0  # crown_m, size_m: larger than the whole frame even at the highest altitude
 
 
 @dataclass(frozen=True)
@@ -85,6 +94,11 @@ def distance_to_path(px: float, py: float, waypoints: Sequence[Point]) -> float:
     return min(distance_to_segment(px, py, a, b) for a, b in zip(waypoints[:-1], waypoints[1:]))
 
 
+def path_length_m(waypoints: Sequence[Point]) -> float:
+    """Length of the path F (m)."""
+    return sum(math.hypot(b[0] - a[0], b[1] - a[1]) for a, b in zip(waypoints[:-1], waypoints[1:]))
+
+
 def in_planting_column(x: float, y: float, crown_m: float, waypoints: Sequence[Point]) -> bool:
     """The app's planting-column rule, against every segment of the path."""
     return within_column(distance_to_path(x, y, waypoints), crown_m, COLUMN_RULE_FACTOR)
@@ -100,6 +114,18 @@ class _Checker:
 
     def fail(self, where, message):
         raise ForaNavError("%s: %s: %s" % (self.source, where, message))
+
+    def coordinate(self, obj, key, where):
+        value = self.number(obj, key, where)
+        if abs(value) > MAX_COORDINATE_M:
+            self.fail(where + key, "must lie within +-%g m, got %r" % (MAX_COORDINATE_M, value))
+        return value
+
+    def size(self, obj, key, where):
+        value = self.number(obj, key, where, positive=True)
+        if value > MAX_SIZE_M:
+            self.fail(where + key, "must be at most %g m, got %r" % (MAX_SIZE_M, value))
+        return value
 
     def number(self, obj, key, where, positive=False, nonnegative=False):
         if key not in obj:
@@ -157,6 +183,9 @@ def map_from_dict(data: dict, source: str = "<map>") -> PlantationMap:
              ("objects", "seed", "target_species"))
     name = c.string(data, "name", "")
     altitude = c.number(data, "altitude_m", "", positive=True)
+    if not ALTITUDE_RANGE_M[0] <= altitude <= ALTITUDE_RANGE_M[1]:
+        c.fail("altitude_m", "must be from %g to %g m (a flight height the camera can work at), got %r"
+               % (ALTITUDE_RANGE_M + (altitude,)))
     target_species = c.string(data, "target_species", "", SPECIES) if "target_species" in data else "oil_palm"
     seed = c.integer(data, "seed", "") if "seed" in data else 0
     if not 0 <= seed <= MAX_SEED:
@@ -169,8 +198,8 @@ def map_from_dict(data: dict, source: str = "<map>") -> PlantationMap:
     for i, wp in enumerate(raw_wps):
         if not isinstance(wp, list) or len(wp) != 2:
             c.fail("waypoints[%d]" % i, "must be [x, y]")
-        waypoints.append((c.number({"x": wp[0]}, "x", "waypoints[%d]." % i),
-                          c.number({"y": wp[1]}, "y", "waypoints[%d]." % i)))
+        waypoints.append((c.coordinate({"x": wp[0]}, "x", "waypoints[%d]." % i),
+                          c.coordinate({"y": wp[1]}, "y", "waypoints[%d]." % i)))
     waypoints = tuple(waypoints)
 
     trees, seen = [], set()
@@ -181,9 +210,9 @@ def map_from_dict(data: dict, source: str = "<map>") -> PlantationMap:
         if tree_id in seen:
             c.fail(where + "id", "duplicate id %d" % tree_id)
         seen.add(tree_id)
-        x, y = c.number(t, "x", where), c.number(t, "y", where)
+        x, y = c.coordinate(t, "x", where), c.coordinate(t, "y", where)
         species = c.string(t, "species", where, SPECIES)
-        crown = c.number(t, "crown_m", where, positive=True)
+        crown = c.size(t, "crown_m", where)
         if "target" in t:
             if not isinstance(t["target"], bool):
                 c.fail(where + "target", "must be true or false")
@@ -196,8 +225,8 @@ def map_from_dict(data: dict, source: str = "<map>") -> PlantationMap:
     for i, o in enumerate(c.array(data, "objects", "") if "objects" in data else []):
         where = "objects[%d]." % i
         c.fields(o, where, ("kind", "x", "y", "size_m"), ("yaw_deg",))
-        objects.append(WorldObject(c.string(o, "kind", where, OBJECT_KINDS), c.number(o, "x", where),
-                                   c.number(o, "y", where), c.number(o, "size_m", where, positive=True),
+        objects.append(WorldObject(c.string(o, "kind", where, OBJECT_KINDS), c.coordinate(o, "x", where),
+                                   c.coordinate(o, "y", where), c.size(o, "size_m", where),
                                    c.number(o, "yaw_deg", where) if "yaw_deg" in o else 0.0))
     return PlantationMap(name, altitude, waypoints, tuple(trees), tuple(objects), seed, target_species, source)
 

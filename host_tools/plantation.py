@@ -7,6 +7,23 @@ Every parameter is a range (lo, hi) in ``PlantationRanges``; per map one value i
 range (integers inclusive), then the trees are placed with it. ``factors`` records the drawn values and what
 was placed (for the sweep's breakdowns). Same seed and ranges, same map (same bytes once saved).
 
+Two profiles (``PROFILES``, ``foranav plantation --profile``):
+
+* ``wide`` (the default since issue 32): 1-3 columns 1-5 m apart, 1.2-5 m long (2-8+ trees), bent (up to 3
+  bends of up to 10 degrees each), staggered (each column's start shifted by up to +-0.6 m), the first
+  column heading anywhere (0-360 degrees), first and last trees from 0.2 m beyond the column's end waypoints
+  (waypoints set by hand rarely sit exactly on the last tree) to 0.45 m inside them, crowns
+  0.28-0.47 m, trees 0.45-0.9 m apart, more gaps and look-alikes, flown at 0.9-1.5 m.
+* ``classic``: the first generator's ranges and its straight columns along +x. A seed gives the very map
+  (same bytes) it gave before the wide profile existed, so the sweeps measured then replay with
+  ``--profile classic``.
+
+Layout: each column is placed in a local planting frame (x along the planting direction, y across it) as
+straight slots, then ``_Warp`` maps the local frame onto the world: the planting direction turns at the
+bends (every column is the same bent line, shifted across), then the whole map turns by the heading of the
+first column. The new draws (heading, bends, offsets, end margin) come from a second random stream, so the
+classic draws are untouched; the identity warp returns its input unchanged (no float rounding).
+
 The column rule and how ambiguity is avoided
 --------------------------------------------
 A tree is a target iff it is an oil palm within 1.5 crown sizes of the path F (host_tools.maps). The app
@@ -18,8 +35,9 @@ generator keeps every oil palm clear of it by ``AMBIGUITY_MARGIN_M``:
   path (the lateral jitter range is capped to guarantee it; the check below enforces it);
 * an oil palm off the column lies at least ``max(1.5 crown, 1.5 x APP_CROWN_M) + AMBIGUITY_MARGIN_M`` from
   every segment of the path (rejection sampling);
-* columns are far enough apart (column_spacing >= the app's rule + margin + jitter) that a palm of one
-  column is outside the app's rule around its neighbours' segments;
+* columns are far enough apart (column_spacing x cos(the largest turn of the planting direction) >= the
+  app's rule + margin, plus the jitter) that a palm of one column is outside the app's rule around its
+  neighbours' segments;
 * trees of other species are non-targets wherever they stand, so they may sit in the column (look-alikes).
 
 A draw that cannot satisfy the checks (nothing fits) places fewer of the optional items; the map's targets
@@ -33,65 +51,136 @@ import numpy as np
 
 from crazyflie_app.navigation_core import NavigationParams
 from host_tools.errors import ForaNavError
-from host_tools.maps import (COLUMN_RULE_FACTOR, PlantationMap, Tree, WorldObject, distance_to_path, in_planting_column,
-                             map_from_dict)
-from host_tools.maps import map_to_dict
+from host_tools.maps import (ALTITUDE_RANGE_M, COLUMN_RULE_FACTOR, PlantationMap, Tree, WorldObject,
+                             distance_to_path, in_planting_column, map_from_dict, map_to_dict)
 
 APP_CROWN_M = NavigationParams.crown_size_m  # the app's crownSize parameter (its default)
 AMBIGUITY_MARGIN_M = 0.15
+ROUNDING_SLACK_M = 1e-3  # positions are written to the mm: a palm can move this much against the rule
 COLUMN_START_X_M = 0.3
-COLUMN_END_MARGIN_M = 0.4  # first/last slot this far inside the column's ends (clear of the turn segments)
 LOOKALIKE_SPECIES = ("coconut", "date_palm", "citrus", "olive")
 TOUCH_TOLERANCE_M = 0.02  # clustered crowns touch: centre distance = sum of radii + 0..this
 CLEARANCE_M = 0.05  # free ground between crowns of items placed off the column grid
 PLACEMENT_TRIES = 200
 OFF_COLUMN_BAND_M = 0.35  # off-column palms lie within this of the nearest allowed distance (in or near view)
-INTEGER_RANGES = ("columns", "lookalikes_beside", "off_column_palms", "roofs", "road_crossings")
+MIN_PIECE_M = 0.6  # bends of the planting direction at least this far apart (and from the column ends)
+MAX_TOTAL_TURN_DEG = 60.0  # the planting direction turns at most this much over a map (bends x bend)
+INTEGER_RANGES = ("columns", "lookalikes_beside", "off_column_palms", "roofs", "road_crossings", "column_bends")
+GEOMETRY_RANGES = ("heading_deg", "column_bends", "bend_deg", "column_offset_m", "column_end_margin_m")
+CAMERA_SCALE = NavigationParams.cam_scale  # m per px per m of height (a crown's size in pixels: the factors)
+# The simulator renders a map's whole ground at once, at half a camera pixel (host_tools/sim/world.py), with
+# a peak of ~45 bytes per mosaic pixel while it builds it: a map whose ground would exceed this many
+# megapixels (estimated from its waypoints, everything placed beside them and the world's margin) is given
+# fewer columns, down to the range's lowest. Only wide maps come near it: 3 columns 5 m apart, turned 45 deg,
+# at 0.9 m would need ~80 Mpx (3.5 GB while building); with the cap the wide maps need at most ~41 Mpx.
+MAX_GROUND_MPX = 60.0
+BESIDE_REACH_M = 2.0  # beyond the path: off-column palms (<= 1.2 m), roofs (<= 0.95 m), their size
 
 
 @dataclass(frozen=True)
 class PlantationRanges:
-    """Each field: (lo, hi), drawn uniformly per map (integers: inclusive). Defaults resemble the paper maps."""
+    """Each field: (lo, hi), drawn uniformly per map (integers: inclusive). The defaults are the ``wide``
+    profile; ``PROFILES["classic"]`` holds the first generator's (the paper-like maps)."""
     columns: tuple = (1, 3)  # planting columns, flown as a serpentine
-    column_length_m: tuple = (1.2, 2.4)
-    column_spacing_m: tuple = (0.9, 1.2)  # between neighbouring columns
-    tree_spacing_m: tuple = (0.45, 0.65)  # between neighbouring slots of a column
-    crown_m: tuple = (0.30, 0.45)  # oil palm crown size, per tree
+    column_length_m: tuple = (1.2, 5.0)
+    column_spacing_m: tuple = (1.0, 5.0)  # between neighbouring columns
+    tree_spacing_m: tuple = (0.45, 0.9)  # between neighbouring slots of a column
+    crown_m: tuple = (0.28, 0.47)  # oil palm crown size, per tree
     lateral_jitter_m: tuple = (0.0, 0.12)  # per map: max |offset| of a tree from its column
-    gap_rate: tuple = (0.0, 0.2)  # probability that a slot is empty
+    gap_rate: tuple = (0.0, 0.3)  # probability that a slot is empty
     cluster_rate: tuple = (0.0, 0.3)  # probability that a tree touches the previous one (crowns touching)
-    lookalike_in_column_rate: tuple = (0.0, 0.1)  # probability that a slot holds a look-alike species
-    lookalikes_beside: tuple = (0, 2)  # look-alike trees beside the columns
-    off_column_palms: tuple = (0, 2)  # oil palms outside the column rule
-    roofs: tuple = (0, 1)
-    road_crossings: tuple = (0, 1)  # road crossings in a gap of a column (under the path)
-    altitude_m: tuple = (1.0, 1.5)  # flight height
+    lookalike_in_column_rate: tuple = (0.0, 0.2)  # probability that a slot holds a look-alike species
+    lookalikes_beside: tuple = (0, 4)  # look-alike trees beside the columns
+    off_column_palms: tuple = (0, 3)  # oil palms outside the column rule
+    roofs: tuple = (0, 2)
+    road_crossings: tuple = (0, 2)  # road crossings in a gap of a column (under the path)
+    altitude_m: tuple = (0.9, 1.5)  # flight height
+    heading_deg: tuple = (0.0, 360.0)  # direction of the first column, counter-clockwise from +x
+    column_bends: tuple = (0, 3)  # bends of the planting direction along the columns (all columns alike)
+    bend_deg: tuple = (0.0, 10.0)  # turn of the planting direction at each bend (sign drawn)
+    column_offset_m: tuple = (0.0, 0.6)  # per map: max shift of a column's start along the planting direction
+    column_end_margin_m: tuple = (-0.2, 0.45)  # first/last slot this far inside the column's ends (< 0: beyond)
 
     def validate(self) -> "PlantationRanges":
         for f in dataclasses.fields(self):
             lo, hi = getattr(self, f.name)
             if not (isinstance(lo, (int, float)) and isinstance(hi, (int, float))) or lo > hi:
                 raise ForaNavError("plantation range %s: expected lo <= hi, got %r" % (f.name, (lo, hi)))
-            if lo < 0:
+            if not (math.isfinite(lo) and math.isfinite(hi)):
+                raise ForaNavError("plantation range %s: must be finite, got %r" % (f.name, (lo, hi)))
+            if lo < 0 and f.name != "column_end_margin_m":
                 raise ForaNavError("plantation range %s: must not be negative, got %r" % (f.name, (lo, hi)))
         for name in ("gap_rate", "cluster_rate", "lookalike_in_column_rate"):
             if getattr(self, name)[1] > 1:
                 raise ForaNavError("plantation range %s: a probability, must be <= 1" % name)
-        if self.columns[0] < 1 or self.altitude_m[0] <= 0 or self.crown_m[0] <= 0 or self.tree_spacing_m[0] <= 0:
-            raise ForaNavError("plantation ranges: columns >= 1, altitude_m, crown_m and tree_spacing_m > 0")
+        if self.columns[0] < 1 or self.crown_m[0] <= 0 or self.tree_spacing_m[0] <= 0:
+            raise ForaNavError("plantation ranges: columns >= 1, crown_m and tree_spacing_m > 0")
+        self._validate_sizes()
         max_jitter = min(COLUMN_RULE_FACTOR * self.crown_m[0], COLUMN_RULE_FACTOR * APP_CROWN_M) - AMBIGUITY_MARGIN_M
         if self.lateral_jitter_m[1] > max_jitter:
             raise ForaNavError("plantation range lateral_jitter_m: at most %.3f m with crown_m from %.2f m "
                                "(keeps palms clear of the column rule)" % (max_jitter, self.crown_m[0]))
-        # a palm of the next column must be outside the app's rule around this column's segment
-        min_spacing = COLUMN_RULE_FACTOR * APP_CROWN_M + AMBIGUITY_MARGIN_M + self.lateral_jitter_m[1]
-        if self.columns[1] > 1 and self.column_spacing_m[0] < min_spacing:
-            raise ForaNavError("plantation range column_spacing_m: at least %.3f m (rule + margin + jitter)"
-                               % min_spacing)
+        # a last (first) tree beyond the column's end (start) waypoint: still inside both rules with the margin
+        overshoot = math.sqrt(max(0.0, max_jitter ** 2 - self.lateral_jitter_m[1] ** 2))
+        if self.column_end_margin_m[0] < -overshoot:
+            raise ForaNavError("plantation range column_end_margin_m: at least %.3f m with crown_m from %.2f m and "
+                               "lateral_jitter_m up to %.2f m (a tree beyond the column's end stays clear of the "
+                               "column rule)" % (-overshoot, self.crown_m[0], self.lateral_jitter_m[1]))
+        # a palm of the next column must be outside the app's rule around this column's segment, also where
+        # the planting direction has turned (the columns are shifted copies: closer by cos(turn) there)
+        rule_and_margin = COLUMN_RULE_FACTOR * APP_CROWN_M + AMBIGUITY_MARGIN_M
+        min_spacing = rule_and_margin / math.cos(math.radians(self.max_turn_deg)) + self.lateral_jitter_m[1]
+        if self.columns[1] > 1 and self.column_spacing_m[0] < min_spacing - 1e-9:
+            raise ForaNavError("plantation range column_spacing_m: at least %.3f m (rule + margin + jitter%s)"
+                               % (min_spacing, ", turns of %.0f deg" % self.max_turn_deg if self.max_turn_deg else ""))
         return self
+
+    def _validate_sizes(self):
+        """Sizes whose extremes break the map or the flight, refused in one line."""
+        lo, hi = ALTITUDE_RANGE_M
+        if self.altitude_m[0] < lo or self.altitude_m[1] > hi:
+            raise ForaNavError("plantation range altitude_m: must lie in %g..%g m (host_tools/maps.py), got %r"
+                               % (lo, hi, self.altitude_m))
+        for name, limit in (("columns", 20), ("column_length_m", 50.0), ("column_spacing_m", 50.0),
+                            ("tree_spacing_m", 10.0), ("crown_m", 5.0), ("lookalikes_beside", 100),
+                            ("off_column_palms", 100), ("roofs", 100), ("road_crossings", 100),
+                            ("heading_deg", 360.0), ("column_bends", 10), ("bend_deg", 45.0),
+                            ("column_offset_m", 10.0), ("column_end_margin_m", 5.0)):
+            if getattr(self, name)[1] > limit:
+                raise ForaNavError("plantation range %s: at most %g, got %r" % (name, limit, getattr(self, name)))
+        if self.max_turn_deg > MAX_TOTAL_TURN_DEG:
+            raise ForaNavError("plantation range bend_deg: column_bends x bend_deg at most %g deg, got %g"
+                               % (MAX_TOTAL_TURN_DEG, self.max_turn_deg))
+
+    @property
+    def max_turn_deg(self) -> float:
+        """The largest turn of the planting direction away from the first column's (every bend one way)."""
+        return float(self.column_bends[1] * self.bend_deg[1])
 
     def with_overrides(self, **ranges: tuple[float, float]) -> "PlantationRanges":
         return dataclasses.replace(self, **ranges).validate()
+
+
+PROFILES = {
+    "wide": PlantationRanges(),
+    "classic": PlantationRanges(column_length_m=(1.2, 2.4), column_spacing_m=(0.9, 1.2),
+                                tree_spacing_m=(0.45, 0.65), crown_m=(0.30, 0.45), gap_rate=(0.0, 0.2),
+                                lookalike_in_column_rate=(0.0, 0.1), lookalikes_beside=(0, 2),
+                                off_column_palms=(0, 2), roofs=(0, 1), road_crossings=(0, 1),
+                                altitude_m=(1.0, 1.5), heading_deg=(0.0, 0.0), column_bends=(0, 0),
+                                bend_deg=(0.0, 0.0), column_offset_m=(0.0, 0.0), column_end_margin_m=(0.4, 0.4)),
+}
+DEFAULT_PROFILE = "wide"
+
+
+def profile_of(ranges: PlantationRanges) -> tuple[str, list[str]]:
+    """The profile ``ranges`` differ least from, and the names of the fields that differ from it."""
+    def differing(name):
+        base = PROFILES[name]
+        return [f.name for f in dataclasses.fields(PlantationRanges)
+                if tuple(getattr(ranges, f.name)) != tuple(getattr(base, f.name))]
+    name = min(PROFILES, key=lambda n: (len(differing(n)), n != DEFAULT_PROFILE))
+    return name, differing(name)
 
 
 def _draw(rng, lo_hi, integer=False):
@@ -105,11 +194,36 @@ def _rule_m(crown_m):
     return COLUMN_RULE_FACTOR * crown_m, COLUMN_RULE_FACTOR * APP_CROWN_M
 
 
+class _Warp:
+    """The local planting frame (x along the planting direction, y across) -> the world.
+
+    The planting direction turns by ``turn_deg`` at each local x in ``bend_xs`` (every column is the same
+    bent line, shifted across it by its y), then the map turns by ``heading_deg`` about the origin."""
+
+    def __init__(self, bend_xs=(), turns_deg=(), heading_deg=0.0):
+        self.identity = not bend_xs and heading_deg == 0.0
+        self.bend_xs = tuple(bend_xs)
+        self.pieces = [(0.0, 0.0, 0.0, 0.0)]  # (local x where it starts, world x, y there, direction rad)
+        direction = 0.0
+        for x, turn in zip(bend_xs, turns_deg):
+            x0, px, py, d = self.pieces[-1]
+            direction += math.radians(turn)
+            self.pieces.append((x, px + (x - x0) * math.cos(d), py + (x - x0) * math.sin(d), direction))
+        self.cos_h, self.sin_h = math.cos(math.radians(heading_deg)), math.sin(math.radians(heading_deg))
+
+    def __call__(self, x, y):
+        if self.identity:
+            return x, y
+        x0, px, py, d = next(p for p in reversed(self.pieces) if x >= p[0] or p is self.pieces[0])
+        bx, by = px + (x - x0) * math.cos(d), py + (x - x0) * math.sin(d) + y
+        return bx * self.cos_h - by * self.sin_h, bx * self.sin_h + by * self.cos_h
+
+
 class _Layout:
     """Trees and objects placed so far, with the overlap test."""
 
     def __init__(self):
-        self.trees = []  # (x, y, species, crown_m)
+        self.trees = []  # (x, y, species, crown_m), world
         self.objects = []  # WorldObject
 
     def free(self, x, y, radius_m, clearance=CLEARANCE_M):
@@ -122,6 +236,31 @@ class _Layout:
         return True
 
 
+@dataclass(frozen=True)
+class _Geometry:
+    """The draws of the second stream: where the columns lie."""
+    warp: _Warp
+    offsets: tuple  # per column: shift of its start along the planting direction (m)
+    end_margin_m: float
+    heading_deg: float
+    bends: int
+    max_turn_deg: float  # largest |turn| of the planting direction from the first column's
+
+
+def _draw_geometry(seed, ranges, columns, length):
+    rng = np.random.default_rng([int(seed), 0x6E0])
+    heading = round(_draw(rng, ranges.heading_deg), 1) % 360.0
+    bends = _draw(rng, ranges.column_bends, integer=True)
+    bends = min(bends, max(0, int(length / MIN_PIECE_M) - 1))  # pieces at least MIN_PIECE_M long
+    turns = [_draw(rng, ranges.bend_deg) * (1.0 if rng.random() < 0.5 else -1.0) for _ in range(bends)]
+    bend_xs = [COLUMN_START_X_M + length * (k + 1) / (bends + 1) for k in range(bends)]
+    offset = _draw(rng, ranges.column_offset_m)
+    offsets = tuple(float(rng.uniform(-offset, offset)) if offset > 0 else 0.0 for _ in range(columns))
+    end_margin = _draw(rng, ranges.column_end_margin_m)
+    max_turn = max([abs(sum(turns[:k + 1])) for k in range(bends)] + [0.0])
+    return _Geometry(_Warp(bend_xs, turns, heading), offsets, end_margin, heading, bends, max_turn)
+
+
 def generate(seed: int, ranges: PlantationRanges | None = None) -> tuple[PlantationMap, dict]:
     """A random plantation (see the module docstring) -> (PlantationMap, factors)."""
     ranges = (ranges or PlantationRanges()).validate()
@@ -130,13 +269,17 @@ def generate(seed: int, ranges: PlantationRanges | None = None) -> tuple[Plantat
          for name in ("columns", "column_length_m", "column_spacing_m", "tree_spacing_m", "lateral_jitter_m",
                       "gap_rate", "cluster_rate", "lookalike_in_column_rate", "lookalikes_beside",
                       "off_column_palms", "roofs", "road_crossings", "altitude_m")}
-    waypoints, columns = _serpentine(d["columns"], d["column_length_m"], d["column_spacing_m"])
+    geometry = _draw_geometry(seed, ranges, d["columns"], d["column_length_m"])
+    waypoints, columns = _serpentine(d["columns"], d["column_length_m"], d["column_spacing_m"], geometry)
+    while d["columns"] > max(1, ranges.columns[0]) and _ground_mpx(waypoints, d["altitude_m"]) > MAX_GROUND_MPX:
+        d["columns"] -= 1  # the simulator could not hold the ground (see MAX_GROUND_MPX)
+        waypoints, columns = _serpentine(d["columns"], d["column_length_m"], d["column_spacing_m"], geometry)
     layout = _Layout()
     counts = {"clusters": 0, "gaps": 0, "lookalikes_in_column": 0, "road_crossings": 0}
     gap_slots = []
     for y, x0, x1 in columns:
-        _fill_column(rng, ranges, d, layout, y, x0, x1, counts, gap_slots)
-    _place_road_crossings(rng, d, layout, gap_slots, counts)
+        _fill_column(rng, ranges, d, layout, (y, x0, x1), geometry, counts, gap_slots)
+    _place_road_crossings(rng, d, layout, gap_slots, counts, geometry.heading_deg)
     placed_beside = _place_beside(rng, ranges, d, layout, waypoints, "lookalike", d["lookalikes_beside"])
     placed_off = _place_beside(rng, ranges, d, layout, waypoints, "off_column", d["off_column_palms"])
     placed_roofs = _place_beside(rng, ranges, d, layout, waypoints, "roof", d["roofs"])
@@ -156,26 +299,52 @@ def generate(seed: int, ranges: PlantationRanges | None = None) -> tuple[Plantat
         "lookalikes_in_column": counts["lookalikes_in_column"], "lookalikes_beside": placed_beside,
         "off_column_palms": placed_off, "roofs": placed_roofs, "road_crossings": counts["road_crossings"],
     }
+    if any(tuple(getattr(ranges, name)) != tuple(getattr(PROFILES["classic"], name)) for name in GEOMETRY_RANGES):
+        # only then: a classic map's factors (stored in sweep specs) keep their bytes
+        palms = [t.crown_m for t in trees if t.species == "oil_palm"] or [0.0]
+        factors.update({
+            "heading_deg": geometry.heading_deg, "bends": geometry.bends,
+            "max_turn_deg": round(geometry.max_turn_deg, 1),
+            "column_offset_m": round(max([abs(o) for o in geometry.offsets] + [0.0]), 3),
+            "column_end_margin_m": round(geometry.end_margin_m, 3),
+            "crown_px_min": round(min(palms) / (CAMERA_SCALE * altitude), 1),
+            "crown_px_max": round(max(palms) / (CAMERA_SCALE * altitude), 1),
+        })
     return pmap, factors
 
 
-def _serpentine(n_columns, length, spacing):
-    """Waypoints of n columns flown alternately forward and back, and each column (y, x_start, x_end)."""
+def _ground_mpx(waypoints, altitude_m):
+    """The simulator's mosaic of a map with these waypoints, estimated (megapixels)."""
+    xs, ys = [p[0] for p in waypoints], [p[1] for p in waypoints]
+    margin = BESIDE_REACH_M + 0.75 * altitude_m + 0.2
+    metres_per_pixel = CAMERA_SCALE * altitude_m / 2.0
+    return ((max(xs) - min(xs) + 2 * margin) * (max(ys) - min(ys) + 2 * margin)) / metres_per_pixel ** 2 / 1e6
+
+
+def _serpentine(n_columns, length, spacing, geometry):
+    """Waypoints (world) of n columns flown alternately forward and back, and each column in the local
+    planting frame (y, x_start, x_end); a column's waypoints include the bends that lie inside it."""
     waypoints, columns = [], []
     y_top = spacing * (n_columns - 1) / 2.0
-    x0, x1 = COLUMN_START_X_M, COLUMN_START_X_M + length
     for k in range(n_columns):
+        x0 = COLUMN_START_X_M + geometry.offsets[k] if geometry.offsets[k] else COLUMN_START_X_M
+        x1 = x0 + length
         y = round(y_top - k * spacing, 4)
-        ends = (x0, x1) if k % 2 == 0 else (x1, x0)
-        waypoints.extend([(round(ends[0], 4), y), (round(ends[1], 4), y)])
+        inside = [b for b in geometry.warp.bend_xs if x0 + 0.1 < b < x1 - 0.1]
+        xs = [x0] + inside + [x1]
+        for x in (xs if k % 2 == 0 else xs[::-1]):
+            wx, wy = geometry.warp(x, y)
+            waypoints.append((round(wx, 4), round(wy, 4)))
         columns.append((y, x0, x1))
     return tuple(waypoints), columns
 
 
-def _fill_column(rng, ranges, d, layout, y, x0, x1, counts, gap_slots):
-    x = x0 + COLUMN_END_MARGIN_M
-    end = x1 - COLUMN_END_MARGIN_M
-    previous = None  # (x, crown, y) of the previous tree in this column
+def _fill_column(rng, ranges, d, layout, column, geometry, counts, gap_slots):
+    y, x0, x1 = column
+    warp = geometry.warp
+    x = x0 + geometry.end_margin_m
+    end = x1 - geometry.end_margin_m
+    previous = None  # (x, crown, y, world x, world y) of the previous tree in this column
     while x <= end:
         crown = _draw(rng, ranges.crown_m)
         jitter = float(rng.uniform(-d["lateral_jitter_m"], d["lateral_jitter_m"]))
@@ -190,7 +359,7 @@ def _fill_column(rng, ranges, d, layout, y, x0, x1, counts, gap_slots):
             counts["clusters"] += 1
         elif roll_gap < d["gap_rate"]:
             counts["gaps"] += 1
-            gap_slots.append((x, y))
+            gap_slots.append(warp(x, y))
             previous = None
             x += d["tree_spacing_m"]
             continue
@@ -198,20 +367,29 @@ def _fill_column(rng, ranges, d, layout, y, x0, x1, counts, gap_slots):
             break
         if previous is not None and x - previous[0] < (previous[1] + crown) / 2.0:
             x = previous[0] + (previous[1] + crown) / 2.0  # never overlapping
-        layout.trees.append((x, y + jitter, species, crown))
+        wx, wy = warp(x, y + jitter)
+        touching_m = (previous[1] + crown) / 2.0 - 1e-9 if previous is not None else 0.0
+        while previous is not None and math.hypot(wx - previous[3], wy - previous[4]) < touching_m:
+            # across a bend the crowns come closer than along the column (never on a straight column)
+            x += 0.005
+            wx, wy = warp(x, y + jitter)
+        if x > end:
+            break
+        layout.trees.append((wx, wy, species, crown))
         counts["lookalikes_in_column"] += species != "oil_palm"
-        previous = (x, crown, y + jitter)
+        previous = (x, crown, y + jitter, wx, wy)
         x += d["tree_spacing_m"]
 
 
-def _place_road_crossings(rng, d, layout, gap_slots, counts):
+def _place_road_crossings(rng, d, layout, gap_slots, counts, heading_deg):
     order = list(rng.permutation(len(gap_slots))) if gap_slots else []
     for index in order[:d["road_crossings"]]:
         x, y = gap_slots[int(index)]
         size = float(rng.uniform(0.35, 0.5))
         if layout.free(x, y, size / 2.0, clearance=0.0):
+            yaw = float(rng.uniform(0, 90))
             layout.objects.append(WorldObject("road_cross", round(x, 3), round(y, 3), round(size, 3),
-                                              round(float(rng.uniform(0, 90)), 1)))
+                                              round((yaw + heading_deg) % 360.0 if heading_deg else yaw, 1)))
             counts["road_crossings"] += 1
 
 
@@ -260,7 +438,8 @@ def _check_unambiguous(trees, waypoints):
             continue
         distance = distance_to_path(tree.x, tree.y, waypoints)
         inner, outer = min(_rule_m(tree.crown_m)), max(_rule_m(tree.crown_m))
-        if not (distance <= inner - AMBIGUITY_MARGIN_M + 1e-6 or distance >= outer + AMBIGUITY_MARGIN_M - 1e-6):
+        inside = distance <= inner - AMBIGUITY_MARGIN_M + ROUNDING_SLACK_M
+        if not (inside or distance >= outer + AMBIGUITY_MARGIN_M - 1e-6):
             raise AssertionError("plantation: tree %d at %.3f m from the path is ambiguous" % (tree.id, distance))
 
 

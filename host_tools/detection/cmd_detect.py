@@ -44,6 +44,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--json", action="store_true", help="one JSON object per image")
 
 
+MIN_CROWN_PX = 8  # a crown smaller than this in the image is no tree the windows can frame
+
+
 def crown_pixels(args: argparse.Namespace) -> float | str | None:
     """The crown diameter in pixels from --crown-px or --gsd/--crown-m (None when no scale is given)."""
     if (args.gsd is None) != (args.crown_m is None):
@@ -54,9 +57,13 @@ def crown_pixels(args: argparse.Namespace) -> float | str | None:
         for name, value in (("--gsd", args.gsd), ("--crown-m", args.crown_m)):
             if not (math.isfinite(value) and value > 0):
                 raise ForaNavError("%s must be a positive number" % name)
-        return args.crown_m / args.gsd
-    if args.crown_px is not None and not (math.isfinite(args.crown_px) and args.crown_px >= 8):
-        raise ForaNavError("--crown-px must be a number of at least 8 pixels")
+        crown_px = args.crown_m / args.gsd
+        if not crown_px >= MIN_CROWN_PX:
+            raise ForaNavError("--gsd %g --crown-m %g: a crown of %.3g px; at least %d pixels"
+                               % (args.gsd, args.crown_m, crown_px, MIN_CROWN_PX))
+        return crown_px
+    if args.crown_px is not None and not (math.isfinite(args.crown_px) and args.crown_px >= MIN_CROWN_PX):
+        raise ForaNavError("--crown-px must be a number of at least %d pixels" % MIN_CROWN_PX)
     return args.crown_px
 
 

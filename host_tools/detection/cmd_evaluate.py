@@ -17,6 +17,7 @@ import math
 
 from host_tools import fileio
 from host_tools.detection import common, dataset, evaluation
+from host_tools.detection.cmd_detect import MIN_CROWN_PX
 from host_tools.detection.threads import single_threaded
 from host_tools.errors import ForaNavError
 from host_tools.plotting import plt
@@ -53,15 +54,19 @@ def crown_scale(args: argparse.Namespace) -> float | None:
             raise ForaNavError("give --crown-px or --gsd with --crown-m, not both")
         if not (math.isfinite(args.gsd) and args.gsd > 0 and math.isfinite(args.crown_m) and args.crown_m > 0):
             raise ForaNavError("--gsd and --crown-m must be positive numbers")
-        return args.crown_m / args.gsd
+        crown_px = args.crown_m / args.gsd
+        if not crown_px >= MIN_CROWN_PX:
+            raise ForaNavError("--gsd %g --crown-m %g: a crown of %.3g px; at least %d pixels"
+                               % (args.gsd, args.crown_m, crown_px, MIN_CROWN_PX))
+        return crown_px
     if args.crown_px is None or args.crown_px == "boxes":
         return args.crown_px
     try:
         value = float(args.crown_px)
     except ValueError:
         raise ForaNavError("--crown-px must be a number of pixels or 'boxes'")
-    if not (math.isfinite(value) and value >= 8):
-        raise ForaNavError("--crown-px must be at least 8 pixels")
+    if not (math.isfinite(value) and value >= MIN_CROWN_PX):
+        raise ForaNavError("--crown-px must be at least %d pixels" % MIN_CROWN_PX)
     return value
 
 

@@ -16,7 +16,7 @@ import os
 import sys
 from pathlib import Path
 
-from host_tools import annotations, fileio
+from host_tools import annotations, argtypes, fileio
 from host_tools.detection import cnn, dataset, evaluation, report, training
 from host_tools.detection.progress import Progress
 from host_tools.detection.threads import single_threaded
@@ -26,6 +26,11 @@ import foranav_colour as colours
 
 import foranav_features as features
 import foranav_model
+
+
+REFERENCE_WIDTH_RANGE = (64, 2048)  # px: the flight camera's frame width (JeVois-A33 modes are 88..1280 px wide)
+MARGIN_RANGE = (0.5, 4.0)  # training window side / crown size
+FRAME_HEIGHT_PER_WIDTH = 0.75  # the narrowest JeVois sensor mode (4:3)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -39,10 +44,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", required=True, metavar="MODEL", help="model file to write (.npz)")
     parser.add_argument("--windows", default=",".join(str(w) for w in training.DEFAULT_WINDOW_SIZES),
                         help="camera window sides in pixels at --reference-width (default %(default)s)")
-    parser.add_argument("--reference-width", type=int, default=training.DEFAULT_REFERENCE_WIDTH,
-                        help="frame width the window sizes refer to (default %(default)s: the flight camera)")
-    parser.add_argument("--margin", type=float, default=training.DEFAULT_MARGIN,
-                        help="training window side / crown size (default %(default)s)")
+    parser.add_argument("--reference-width", type=argtypes.int_range(*REFERENCE_WIDTH_RANGE),
+                        default=training.DEFAULT_REFERENCE_WIDTH,
+                        help="frame width the window sizes refer to (default %d: the flight camera; %d..%d)"
+                        % ((training.DEFAULT_REFERENCE_WIDTH,) + REFERENCE_WIDTH_RANGE))
+    parser.add_argument("--margin", type=argtypes.float_range(*MARGIN_RANGE), default=training.DEFAULT_MARGIN,
+                        help="training window side / crown size (default %g; %g..%g)"
+                        % ((training.DEFAULT_MARGIN,) + MARGIN_RANGE))
     parser.add_argument("--colour", choices=colours.COLOUR_KINDS, default="templates",
                         help="colour model per imagery: templates (hue/saturation correlation) or linear "
                         "(a classifier on the histograms); default %(default)s")
@@ -100,15 +108,24 @@ def check_out(path: str) -> None:
         raise ForaNavError("--out %s: cannot write in %s" % (path, existing))
 
 
+def _windows(text: str, reference_width: int) -> tuple[int, ...]:
+    """--windows: comma-separated sides, each from the HOG window (24 px) to the shorter side of a frame
+    ``reference_width`` wide (every JeVois sensor mode is at least 3/4 as high as it is wide)."""
+    try:
+        windows = tuple(int(w) for w in text.split(","))
+    except ValueError:
+        raise ForaNavError("--windows must be comma-separated integers, got %r" % text)
+    largest = int(reference_width * FRAME_HEIGHT_PER_WIDTH)
+    if min(windows) < features.HOG_WINDOW or max(windows) > largest:
+        raise ForaNavError("--windows: each side must be %d..%d px (the frame's shorter side at --reference-width "
+                           "%d), got %s" % (features.HOG_WINDOW, largest, reference_width, text))
+    return windows
+
+
 def run(args: argparse.Namespace) -> int:
     fileio.check_output_file(args.out)  # before the training run, not after it
     single_threaded()
-    try:
-        windows = tuple(int(w) for w in args.windows.split(","))
-    except ValueError:
-        raise ForaNavError("--windows must be comma-separated integers")
-    if min(windows) < 24 or not args.margin > 0 or args.reference_width <= 0:
-        raise ForaNavError("--windows must be >= 24 px, --margin and --reference-width positive")
+    windows = _windows(args.windows, args.reference_width)
     if not 1 <= args.colour_templates <= 16:
         raise ForaNavError("--colour-templates must be 1..16")
     if not args.data and not args.domain:
@@ -132,8 +149,8 @@ def run(args: argparse.Namespace) -> int:
                                colour_kind=args.colour, colour_templates=args.colour_templates,
                                provenance=args.provenance, second_kind=args.second_stage,
                                second_views=args.second_views, cnn=args.cnn, progress=progress)
-    except ValueError as err:
-        raise ForaNavError(str(err))
+    except ValueError as err:  # e.g. no complete tree of the species: name the data it looked at
+        raise ForaNavError("%s: %s" % (", ".join(str(path) for _name, path in named), err))
     progress.finish()
     with fileio.atomic_path(args.out) as tmp:
         with open(str(tmp), "wb") as handle:

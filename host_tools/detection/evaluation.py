@@ -23,7 +23,7 @@ import cv2
 import numpy as np
 
 from host_tools import fileio
-from host_tools.annotations import Box
+from host_tools.annotations import Box, refuse_nul_bytes
 from host_tools.detection import dataset
 from host_tools.errors import ForaNavError
 
@@ -137,13 +137,22 @@ def is_crops_csv(path: str | os.PathLike) -> bool:
 def read_crops(csv_path: str | os.PathLike) -> list[tuple[str, bool, str]]:
     """[(image path, is positive, category)] of a crops CSV."""
     csv_path = Path(csv_path)
-    rows = list(csv.reader(io.StringIO(fileio.read_text(csv_path, "crops CSV"))))
-    crops = []
+    text = fileio.read_text(csv_path, "crops CSV")
+    refuse_nul_bytes(text, csv_path)
+    try:
+        rows = list(csv.reader(io.StringIO(text)))
+    except csv.Error as err:  # e.g. a field over csv.field_size_limit() (128 KiB)
+        raise ForaNavError("%s: not a valid CSV: %s" % (csv_path, err))
+    crops, first_line = [], {}
     for line_no, row in enumerate(rows[1:], start=2):
         if not row:
             continue
         if len(row) != 3 or row[1] not in ("pos", "neg"):
             raise ForaNavError("%s: line %d: expected image,pos|neg,category" % (csv_path, line_no))
+        if row[0] in first_line:  # one crop counted twice in the accuracy
+            raise ForaNavError("%s: line %d: crop %s already listed on line %d (a duplicated row)"
+                               % (csv_path, line_no, row[0], first_line[row[0]]))
+        first_line[row[0]] = line_no
         crops.append((str(csv_path.parent / row[0]), row[1] == "pos", row[2]))
     if not crops:
         raise ForaNavError("%s: no crops" % csv_path)

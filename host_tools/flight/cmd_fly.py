@@ -43,14 +43,15 @@ import time
 from pathlib import Path
 from typing import TextIO
 
+from crazyflie_app.navigation_core import NavigationParams
 from host_tools import argtypes, fileio
 from host_tools.errors import ForaNavError
 from host_tools.flight import camera_factory, run_flight
 from host_tools.flight.components import check_crtp_endpoint
 from host_tools.flight.realtime import run_realtime
-from host_tools.flight.registry import PLANTS, POSITIONINGS, plant_model_options
+from host_tools.flight.registry import PLANTS, POSITIONINGS, check_options, plant_model_options
 from host_tools.flight.vision_camera import model_option
-from host_tools.maps import load_map
+from host_tools.maps import load_map, path_length_m
 from host_tools.sim.cli_args import add_appearance_arguments, appearance_from_args, appearance_spec_from_args
 
 CAMERA_CHOICES = ("oracle", "sim")
@@ -211,6 +212,15 @@ def print_table(summary: dict, out: TextIO | None = None) -> None:
         print("  tlog %s\n  plot %s" % (summary["tlog"], summary["plot"]), file=out)
 
 
+def _check_flyable(pmap, max_time_s):
+    """Refuse a map whose path alone takes longer than a flight may last (it could only end unfinished)."""
+    path_s = path_length_m(pmap.waypoints) / NavigationParams.cruise_speed
+    if path_s > max_time_s:
+        raise ForaNavError("%s: waypoints: the path F is %.0f m long, %.0f s at the app's cruise speed %g m/s; "
+                           "a flight ends at %.0f s" % (pmap.source, path_length_m(pmap.waypoints), path_s,
+                                                         NavigationParams.cruise_speed, max_time_s))
+
+
 def run(args: argparse.Namespace) -> int:
     factory = camera_factory(args.camera)
     options = flight_options(args)
@@ -223,6 +233,7 @@ def run(args: argparse.Namespace) -> int:
     if args.crtp:
         check_crtp_endpoint(args.crtp)
     pmap = load_map(args.map)
+    _check_flyable(pmap, check_options(options)["max_time_s"])
     if args.hide_tree is not None and args.hide_tree not in {tree.id for tree in pmap.trees}:
         raise ForaNavError("--hide-tree: map %s has no tree %d (its trees: %s)" % (
             args.map, args.hide_tree, ", ".join(str(tree.id) for tree in pmap.trees)))

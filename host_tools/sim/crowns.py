@@ -32,6 +32,7 @@ import numpy as np
 
 from host_tools.annotations import read_boxes
 from host_tools.errors import ForaNavError
+from host_tools.images import read_image as read_image_file
 from host_tools.maps import SPECIES
 from host_tools.sim.sprite import Sprite
 
@@ -116,10 +117,10 @@ def _numbered_boxes(csv_path):
 
 
 def _read_image(path, csv_path, line_no):
-    image = cv2.imread(str(path), cv2.IMREAD_COLOR)  # decodes by content (.tif chips that are JPEG)
-    if image is None or image.size == 0:
-        raise ForaNavError("%s: line %d: image %s cannot be read" % (csv_path, line_no, path))
-    return image
+    try:  # decodes by content (.tif chips that are JPEG); refuses empty, truncated and huge-claiming files
+        return read_image_file(path)
+    except ForaNavError as err:
+        raise ForaNavError("%s: line %d: %s" % (csv_path, line_no, err))
 
 
 def assign(library: CrownLibrary, trees: Sequence, seed: int) -> dict:
@@ -179,10 +180,10 @@ def crown_sprite(crown: Crown, col: float, row: float, diameter_px: float, angle
 
 def load_ground(path: str | Path) -> np.ndarray:
     """The ground photo (BGR uint8); ForaNavError naming the file when it does not load."""
-    image = cv2.imread(str(path), cv2.IMREAD_COLOR)
-    if image is None or image.size == 0:
-        raise ForaNavError("--ground %s: cannot be read as an image" % path)
-    return image
+    try:
+        return read_image_file(path)
+    except ForaNavError as err:
+        raise ForaNavError("--ground %s" % err)
 
 
 def ground_from_photo(photo: np.ndarray, gsd_m: float, height: int, width: int, metres_per_pixel: float,

@@ -17,12 +17,16 @@ import cv2
 import numpy as np
 
 from host_tools.sim import broadleaf, crowns, ground, objects, palms
+from host_tools.errors import ForaNavError
 from host_tools.maps import SPECIES, PlantationMap, Tree
 from host_tools.sim.camera import METRES_PER_PIXEL_PER_METRE_AT_352, CameraModel, Pose
 from host_tools.sim.sprite import Sprite, composite, darken
 
 SUPERSAMPLING = 2  # the finest level has twice the ground resolution of a 352x288 camera at the map altitude
 LEVELS = 4  # finest + 3 halvings: good down to 1/8 the resolution (8x the altitude)
+# the whole ground is rendered at once, ~45 bytes per finest pixel while it is built (float ground, strokes,
+# sprites): a map needing more is refused in one line (a map 1 km long once asked numpy for terabytes)
+MAX_MOSAIC_PIXELS = 100 * 10 ** 6
 SHADOW_STRENGTH = 0.45
 TREE_HEIGHT_PER_CROWN = 0.5  # model trees: height about half the crown diameter (sets the shadow length)
 
@@ -176,6 +180,11 @@ class World:
         multiple = 2 ** (LEVELS - 1)
         width = int(math.ceil((y_max - y_min) / mpp / multiple)) * multiple
         height = int(math.ceil((x_max - x_min) / mpp / multiple)) * multiple
+        if width * height > MAX_MOSAIC_PIXELS:
+            raise ForaNavError("%s: its ground (%.1f x %.1f m at %.2f mm per pixel, for altitude_m %g) needs %d Mpx; "
+                               "the simulator renders at most %d Mpx: a smaller map or a higher flight"
+                               % (pmap.source or pmap.name, x_max - x_min, y_max - y_min, mpp * 1000, pmap.altitude_m,
+                                  width * height // 10 ** 6, MAX_MOSAIC_PIXELS // 10 ** 6))
         bounds = (x_max - height * mpp, x_max, y_max - width * mpp, y_max)
         rng = np.random.default_rng([seed & 0xFFFFFFFF, 0])
         lighting = Lighting.random(rng)

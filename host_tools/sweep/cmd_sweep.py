@@ -43,7 +43,7 @@ from host_tools.sim.cli_args import appearance_from_args
 from host_tools.sweep import report as report_mod
 from host_tools.sweep.conditions import FAULT_PRESETS, preset
 from host_tools.sweep.runner import run_sweep
-from host_tools.sweep.specs import make_specs
+from host_tools.sweep.specs import make_specs, seed_role, stored_ranges
 from host_tools.sweep.store import SweepStore
 
 PROGRESS_EVERY_S = 10.0  # without a terminal: one progress line this often
@@ -182,7 +182,7 @@ def run(args: argparse.Namespace) -> int:
         rows = store.rows()
         if not args.report_only:
             rows = [r for r in rows if r["index"] < args.count]
-    ranges = PlantationRanges(**{k: tuple(v) for k, v in identity.get("ranges", {}).items()})
+    ranges = stored_ranges(identity["ranges"]) if "ranges" in identity else PlantationRanges()
     report = report_mod.build_report(rows, args.out, identity={k: identity[k] for k in ("seed", "faults", "camera")
                                                                if k in identity}, ranges=ranges)
     if counts is not None:
@@ -192,6 +192,8 @@ def run(args: argparse.Namespace) -> int:
         print(json.dumps(report, indent=2))
     else:
         print(report_mod.headline(report))
+        if "seed" in identity:
+            print("seed %d: a %s seed (docs/sweeps.md)" % (identity["seed"], seed_role(int(identity["seed"]))))
         print("failures: " + (", ".join("%s %d" % kv for kv in report["failures"].items() if kv[1]) or "none"))
         if counts is not None:
             print("this run: %d flown, %d skipped (already stored), %.0f s" % (counts["flown"], counts["skipped"],

@@ -16,7 +16,7 @@ from pathlib import Path
 from host_tools import fileio
 from host_tools.plantation import PlantationRanges
 from host_tools.plotting import plt
-from host_tools.sweep.specs import fly_command, plantation_command
+from host_tools.sweep.specs import fly_command, plantation_command, seed_role
 
 Z95 = 1.959964
 WORST_SHOWN = 10
@@ -24,10 +24,17 @@ FAILURE_CLASSES = ("crash", "not completed", "missed target", "repeated target",
                    "reached nothing", "watchdog")
 # factor -> (where it lives, bin edges or None for categories)
 FACTORS = {
-    "altitude_m": ("factors", (1.0, 1.125, 1.25, 1.375, 1.5001)),
+    "altitude_m": ("factors", (0.9, 1.0, 1.125, 1.25, 1.375, 1.5001)),
     "columns": ("factors", None),
-    "tree_spacing_m": ("factors", (0.45, 0.52, 0.59, 0.6501)),
+    "column_length_m": ("factors", (1.2, 2.4, 3.6, 5.0001)),
+    "column_spacing_m": ("factors", (0.9, 1.2, 2.0, 3.0, 5.0001)),
+    "tree_spacing_m": ("factors", (0.45, 0.52, 0.59, 0.65, 0.9001)),
     "lateral_jitter_m": ("factors", (0.0, 0.04, 0.08, 0.1201)),
+    "heading_deg": ("factors", (0.0, 45.0, 90.0, 135.0, 180.0, 225.0, 270.0, 315.0, 360.0)),
+    "bends": ("factors", None),
+    "column_offset_m": ("factors", (0.0, 0.2, 0.4, 0.6001)),
+    "column_end_margin_m": ("factors", (0.15, 0.25, 0.35, 0.4501)),
+    "crown_px_max": ("factors", (0.0, 120.0, 140.0, 161.0, 200.0)),
     "clusters": ("factors", "any"),
     "gaps": ("factors", "any"),
     "lookalikes_in_column": ("factors", "any"),
@@ -240,6 +247,9 @@ def markdown(report: dict) -> str:
     sweep = report["sweep"]
     if sweep:
         out += ["Sweep: " + ", ".join("%s %s" % (k, v) for k, v in sorted(sweep.items())), ""]
+    if "seed" in sweep:
+        out += ["Seed %s is a %s seed (docs/sweeps.md: only reporting seeds give reported rates)."
+                % (sweep["seed"], seed_role(int(sweep["seed"]))), ""]
     out += [headline(report), ""]
     out += ["Mean of the per-flight mean deviations: %s m; CPU per flight: %s s." % (
         _num(report["mean_of_flight_means_m"]), report["cpu_s_per_flight"]), ""]

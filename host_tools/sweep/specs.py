@@ -16,10 +16,27 @@ from collections.abc import Sequence
 import numpy as np
 
 from host_tools.maps import map_to_dict
-from host_tools.plantation import PlantationRanges, generate
+from host_tools.plantation import DEFAULT_PROFILE, PROFILES, PlantationRanges, generate, profile_of
 from host_tools.sweep import conditions as cond
 
 SEED_LIMIT = 2 ** 31 - 1
+# Tuning seeds and reporting seeds (docs/sweeps.md): a rate that is reported comes from sweeps nobody looked
+# at while changing the app, the camera or the generator.
+TUNING_SWEEP_SEEDS = range(0, 1000)  # sweeps looked at while changing code
+REPORTING_SWEEP_SEEDS = range(1000, 2000)  # reported rates only, each seed once (ledger in docs/sweeps.md)
+TUNING_PLANTATION_SEEDS = range(0, 10_000)  # foranav plantation --seed in tests and examples
+
+
+def seed_role(sweep_seed: int) -> str:
+    """'tuning', 'reporting' or 'unassigned': what a sweep with this seed may be used for."""
+    if sweep_seed in TUNING_SWEEP_SEEDS:
+        return "tuning"
+    return "reporting" if sweep_seed in REPORTING_SWEEP_SEEDS else "unassigned"
+
+
+def plantation_seed(sweep_seed: int, index: int) -> int:
+    """The plantation seed of flight ``index`` of the sweep with ``sweep_seed`` (the first draw of its spec)."""
+    return int(np.random.default_rng([int(sweep_seed), int(index), 0x5EE9]).integers(0, SEED_LIMIT))
 
 
 def flight_spec(sweep_seed: int, index: int, *, faults: str = "none", camera: str = "sim",
@@ -49,14 +66,19 @@ def make_specs(count: int, sweep_seed: int, *, faults: str = "none", camera: str
 
 
 def ranges_arguments(ranges: PlantationRanges | None) -> list[str]:
-    """The ``foranav plantation`` options that give ``ranges`` (only those that differ from the defaults)."""
-    default = PlantationRanges()
-    args = []
-    for f in dataclasses.fields(PlantationRanges):
-        value = getattr(ranges, f.name)
-        if tuple(value) != tuple(getattr(default, f.name)):
-            args += ["--" + f.name.replace("_", "-"), "%s:%s" % tuple(value)]
+    """The ``foranav plantation`` options that give ``ranges``: the nearest profile (when not the default)
+    and the ranges that differ from it."""
+    profile, differing = profile_of(ranges)
+    args = [] if profile == DEFAULT_PROFILE else ["--profile", profile]
+    for name in differing:
+        args += ["--" + name.replace("_", "-"), "%s:%s" % tuple(getattr(ranges, name))]
     return args
+
+
+def stored_ranges(stored: dict) -> PlantationRanges:
+    """The ranges a sweep store recorded; a store from before the wide profile lacks the geometry ranges,
+    whose values were then the classic profile's."""
+    return dataclasses.replace(PROFILES["classic"], **{k: tuple(v) for k, v in stored.items()})
 
 
 def fly_command(spec: dict, map_path: str | os.PathLike) -> str:

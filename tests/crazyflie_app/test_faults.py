@@ -2,6 +2,7 @@
 MAV on the ground, frames with more detections than T_d has room for never crash, a frame without MARK STOP
 cannot grow without limit, a tree abandoned while hidden gets one more try before landing, and one crown seen
 twice in one frame is one tree."""
+import dataclasses
 import json
 import subprocess
 import sys
@@ -14,6 +15,7 @@ from crazyflie_app.navigation_core import (PHASE_FOLLOW_PATH, PHASE_LAND, PHASE_
                                            PHASE_RECOVERY, PHASE_TAKEOFF, Detection, NavigationCore,
                                            NavigationParams, Pose, merge_duplicates)
 from crazyflie_app.tree_memory import TreeMemory
+from host_tools.errors import ForaNavError
 from host_tools.flight import camera_factory, run_flight
 from host_tools.maps import load_map
 from jevois_module.ForaNavTrees import foranav_serial as fs
@@ -158,7 +160,11 @@ def test_that_a_dense_plantation_with_the_oracle_never_crashes():
 
 
 def test_that_a_map_flown_at_1000_m_with_the_oracle_never_crashes():
-    pmap = load_map(str(FAULT_MAPS / "map1_1000m.json"))
+    # the loader refuses such a map now (host_tools.maps.ALTITUDE_RANGE_M); the app must still survive every
+    # tree of the map in one frame, so the map is built past the loader
+    with pytest.raises(ForaNavError, match="altitude_m: must be from"):
+        load_map(str(FAULT_MAPS / "map1_1000m.json"))
+    pmap = dataclasses.replace(load_map("map1"), altitude_m=1000.0)
     summary = run_flight(pmap, camera_factory("oracle")(pmap), options={"max_time_s": 60})
     assert summary["detections"] > 0
 

@@ -28,6 +28,7 @@ class World(object):
         self.wind = (0.0, 0.0)  # m/s added to the commanded velocity (a steady push the MAV does not feel)
         self.t = 0
         self.trees = list(trees)
+        self.whole_crowns_m = None  # a crown size: the camera reports a tree only when that crown is whole in view
         self.hidden = set(range(len(self.trees)))  # nothing in view during the take-off
         self.commands = []
         self.core.start(0)
@@ -36,18 +37,20 @@ class World(object):
         self.hidden = set()
 
     def pose(self):
-        return Pose(self.x, self.y, ALTITUDE, 0.0, self.vx, self.vy)
+        return Pose(self.x, self.y, self.params.altitude_m, 0.0, self.vx, self.vy)
 
     def pixel(self, tx, ty):
         f = self.params.focal_px
-        return (self.params.cam_width_px / 2 - (ty - self.y) * f / ALTITUDE,
-                self.params.cam_height_px / 2 - (tx - self.x) * f / ALTITUDE)
+        return (self.params.cam_width_px / 2 - (ty - self.y) * f / self.params.altitude_m,
+                self.params.cam_height_px / 2 - (tx - self.x) * f / self.params.altitude_m)
 
     def frame(self):
         dets = []
+        px_per_m = self.params.focal_px / self.params.altitude_m
+        r = 0.0 if self.whole_crowns_m is None else self.whole_crowns_m / 2 * px_per_m
         for i, (tx, ty) in enumerate(self.trees):
             u, v = self.pixel(tx, ty)
-            if i not in self.hidden and 0 <= u <= 352 and 0 <= v <= 288:
+            if i not in self.hidden and r <= u <= 352 - r and r <= v <= 288 - r:
                 dets.append(Detection(u, v))
         return dets
 
@@ -300,8 +303,28 @@ def test_that_without_integral_the_relaxed_rule_still_finishes_the_tree():
 
 def test_that_a_waypoint_counts_as_passed_once_the_mav_is_beyond_its_segment_end():
     core = NavigationCore(NavigationParams(), ((0, 0), (4, 0), (4, -1)))
+    end = 4.0 + core.route.end_reach_m  # the segment is flown that far beyond its end waypoint
     core.phase, core.waypoint_index = nc.PHASE_FOLLOW_PATH, 1
-    core.step(0, Pose(3.9, 0.1, ALTITUDE, 0.0, 0.1, 0.0))
+    core.step(0, Pose(end - 0.1, 0.1, ALTITUDE, 0.0, 0.1, 0.0))
     assert core.waypoint_index == 1
-    core.step(10, Pose(4.05, 0.1, ALTITUDE, 0.0, 0.1, 0.0))  # 0.11 m from the waypoint but past it
+    core.step(10, Pose(end + 0.05, 0.1, ALTITUDE, 0.0, 0.1, 0.0))  # 0.11 m from the segment's end but past it
     assert core.waypoint_index == 2
+
+
+@pytest.mark.parametrize("altitude, reach", [(0.9, 0.298), (1.0, 0.254), (1.25, 0.142), (1.6, 0.0)])
+def test_that_a_segment_reaches_as_far_beyond_its_waypoint_as_the_column_is_out_of_whole_view(altitude, reach):
+    # the column reaches 1.5 x 0.35 m beyond the waypoint; a 0.35 m crown is whole in the 288 px high frame up
+    # to 144 px x height / 322.58 px - 0.175 m ahead
+    core = NavigationCore(NavigationParams(altitude_m=altitude), ((0, 0), (2, 0), (2, 3)))
+    assert core.route.end_reach_m == pytest.approx(reach, abs=1e-3)
+    core.waypoint_index = 1
+    assert core.route.segment_end() == pytest.approx((2.0 + core.route.end_reach_m, 0.0))
+
+
+def test_that_the_last_tree_of_a_column_beyond_its_end_waypoint_is_reached():
+    # issue 32 (tuning sweep 9 with trees beyond the column ends, flight 1): a palm 0.2 m beyond the last
+    # waypoint, flown at 0.92 m, never came whole into view before the waypoint and the app landed (here 0.26 m)
+    world = World([(2.26, 0.0)], path=((0.0, 0.0), (2.0, 0.0)), altitude_m=0.92)
+    world.whole_crowns_m = 0.35  # the camera reports a crown only when it lies whole in the frame
+    assert world.run(60000, until=lambda w: w.core.phase == nc.PHASE_DONE)
+    assert len(world.events("tree_reached")) == 1

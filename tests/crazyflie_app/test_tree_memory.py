@@ -85,9 +85,27 @@ def test_that_a_stored_tree_drifting_onto_a_reached_tree_is_dropped_as_that_tree
     sut.mark_visited(reached, 1000, MAV, reached=True)
     twin = add(sut, 1.496, 0.038)
     neighbour = add(sut, 1.155, 0.049)  # the next tree of the column, 0.45 m on
-    assert sut.absorb_reached(DUP_RADIUS) == [(twin, reached)]
+    assert sut.absorb_reached(DUP_RADIUS, 1100, MAV) == [(twin, reached)]
     assert sut.get(twin) is None and sut.get(neighbour) is not None and sut.absorbed == 1
-    assert sut.absorb_reached(DUP_RADIUS) == []
+    assert sut.absorb_reached(DUP_RADIUS, 1200, MAV) == []
+
+
+def test_that_an_absorbed_tree_stays_as_a_visited_entry_that_takes_a_second_detection_of_the_crown():
+    # issue 32, wide sweep flight 55: crowns 0.32 m apart; windows over both pulled the second one's estimate
+    # 0.24 m from the reached first one: absorbed. The next frame that detected both crowns stored the second
+    # one again (exclusivity), approached, absorbed... The absorbed tree now stays in the visited list at the
+    # reached tree's position, not reached: that frame's second detection goes to it
+    sut = TreeMemory()
+    reached = add(sut, 1.419, 2.021)
+    sut.mark_visited(reached, 1000, MAV, reached=True)
+    pulled = add(sut, 1.60, 1.95)
+    assert sut.absorb_reached(DUP_RADIUS, 1100, MAV) == [(pulled, reached)]
+    entry = sut.visited[-1]
+    assert (entry.id, entry.x, entry.y, entry.t_ms, entry.reached, entry.revisit) == \
+        (pulled, 1.419, 2.021, 1100, False, False)
+    assert sut.associate([(1.42, 2.02), (1.73, 1.90)], [MERGE_RADIUS] * 2) == [("visited", reached),
+                                                                               ("visited", pulled)]
+    assert not sut.near_reached(sut.visited[0], DUP_RADIUS)  # the absorbed entry is no reached tree
 
 
 def test_that_a_tree_near_an_abandoned_one_is_not_absorbed_and_an_abandoned_twin_of_a_reached_tree_is_flagged():
@@ -95,7 +113,7 @@ def test_that_a_tree_near_an_abandoned_one_is_not_absorbed_and_an_abandoned_twin
     abandoned = add(sut, 1.265, -0.645)
     sut.mark_visited(abandoned, 1000, MAV, reached=False, revisit=True)
     near_abandoned = add(sut, 1.30, -0.60)
-    assert sut.absorb_reached(DUP_RADIUS) == []  # only reached trees absorb
+    assert sut.absorb_reached(DUP_RADIUS, 1100, MAV) == []  # only reached trees absorb
     entry = sut.visited[0]
     assert not sut.near_reached(entry, DUP_RADIUS)
     sut.mark_visited(near_abandoned, 2000, MAV, reached=True)  # flight m7: the same crown, reached later

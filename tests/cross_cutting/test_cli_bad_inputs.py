@@ -68,6 +68,22 @@ def inputs(tmp_path_factory):
     (root / "frames_not_list").mkdir()
     sidecar["frames"] = 7
     (root / "frames_not_list" / "clip.json").write_text(json.dumps(sidecar))
+    # issue 32: a map far beyond any flight (simulator and app), boxes CSVs that must be named as what they are
+    write_map(root / "altitude_1e6.json", altitude_m=1e6)
+    write_map(root / "altitude_0p1.json", altitude_m=0.1)
+    write_map(root / "path_900m.json", waypoints=[[0.0, 0.0], [900.0, 0.0]])
+    write_map(root / "path_400m.json", waypoints=[[0.0, 0.0], [0.0, 400.0]], altitude_m=0.5)
+    data = json.loads((Path(cli.__file__).parent / "data" / "maps" / "map1.json").read_text())
+    data["trees"][0]["crown_m"] = 1e6
+    (root / "crown_1e6.json").write_text(json.dumps(data))
+    data["trees"][0]["crown_m"], data["trees"][1]["x"] = 0.4, 1e7
+    (root / "tree_x_1e7.json").write_text(json.dumps(data))
+    (root / "empty.png").write_bytes(b"")
+    (root / "nul_rows.csv").write_bytes(CSV_HEADER.encode() + (b"\x00" * 40 + b"\n") * 3)
+    (root / "nul_file.csv").write_bytes(b"\x00" * 300)
+    (root / "huge_box.csv").write_text(CSV_HEADER + "a.png,100,100,1e300,1e300,oil_palm\n")
+    (root / "duplicated_rows.csv").write_text(CSV_HEADER + "a.png,100,100,60,60,oil_palm\n" * 3)
+    (root / "duplicated_crops.csv").write_text("image,class,category\n" + "pos/1.png,pos,oil_palm\n" * 2)
     (root / "big_field.csv").write_text(CSV_HEADER + "a.png,1,1,1,1," + "x" * (FIELD_LIMIT + 10) + "\n")
     # a Latin-1 name far down a long CSV (past any reader's first buffer)
     rows = "".join("f%04d.png,10,10,5,5,oil_palm\n" % i for i in range(600))
@@ -114,7 +130,14 @@ MAP_ROWS = [  # map inputs, the same for every command that reads a map
     ("{in}/latin1.json", "latin1.json"), ("{in}/deep.json", "deep.json"), ("{in}/truncated.json", "truncated.json"),
     ("{in}/nan_altitude.json", "altitude_m"), ("{in}/no_trees_field.json", "trees"),
     ("{in}/folder.json", "folder.json"), ("no_such_map", "no_such_map"), ("{in}/negative_seed.json", "seed"),
-    ("{in}/big_int.json", "altitude_m"), ("{in}/huge_int.json", "huge_int.json")]
+    ("{in}/big_int.json", "altitude_m"), ("{in}/huge_int.json", "huge_int.json"),
+    ("{in}/altitude_1e6.json", "altitude_1e6.json: altitude_m: must be from 0.4 to 4.5 m"),
+    ("{in}/altitude_0p1.json", "altitude_m"), ("{in}/crown_1e6.json", "trees[0].crown_m: must be at most"),
+    ("{in}/tree_x_1e7.json", "trees[1].x: must lie within")]
+CSV_ROWS = [  # boxes CSVs, the same for every command that reads one (host_tools/annotations.py)
+    ("{in}/nul_rows.csv", "nul_rows.csv: line 2: NUL bytes"), ("{in}/nul_file.csv", "nul_file.csv: line 1: NUL"),
+    ("{in}/huge_box.csv", "huge_box.csv: line 2: width 1e+300 px is beyond any image"),
+    ("{in}/duplicated_rows.csv", "duplicated_rows.csv: line 3: the same box of a.png as line 2")]
 RENDER = ["render", "--map", "map1", "--x", "1", "--y", "0"]
 RECORD = ["record", "--map", "map1"]
 FLY = ["fly", "--map", "map1", "--camera", "oracle"]
@@ -139,6 +162,8 @@ CASES = [
     (RENDER + ["--out", "existing_dir"], "--out"),
     (RENDER + ["--out", "ro/x.png"], "--out"),
     (RENDER[:4] + ["--y", "0", "--out", "keep.png"], "--x"),
+    (["render", "--map", "{in}/path_400m.json", "--x", "0", "--y", "1", "--out", "keep.png"],
+     "path_400m.json: its ground"),
 ] + [(["render", "--map", path, "--x", "1", "--y", "0", "--out", "keep.png"], named) for path, named in MAP_ROWS] + [
     # record
     (RECORD + ["--out", "clip", "--fps", "1e9"], "--fps"),
@@ -153,6 +178,8 @@ CASES = [
     (RECORD + ["--out", "clip", "--start", "1000"], "--start"),
     (RECORD + ["--out", "clip", "--z", "nan"], "--z"),
     (RECORD + ["--out", "clip", "--fps", "100", "--speed", "0.01", "--duration", "10000"], "--fps"),
+    (["record", "--map", "{in}/altitude_1e6.json", "--out", "clip"], "altitude_m"),
+    (["record", "--map", "{in}/path_400m.json", "--out", "clip"], "path_400m.json: its ground"),
     (RECORD + ["--out", "afile"], "--out"),
     (RECORD + ["--out", "afile/clip"], "--out"),
     (RECORD + ["--out", "ro"], "--out"),
@@ -188,6 +215,11 @@ CASES = [
     (FLY + ["--crtp", "127.0.0.1:70000"], "--crtp"),
     (FLY + ["--crtp", "0"], "--crtp"),
     (FLY + ["--crtp", "192.0.2.1:19850"], "--crtp"),  # an address of no interface here: cannot bind
+    (["fly", "--map", "{in}/altitude_1e6.json", "--camera", "oracle"], "altitude_m"),
+    (["fly", "--map", "{in}/altitude_1e6.json"], "altitude_m"),
+    (["fly", "--map", "{in}/path_900m.json", "--camera", "oracle"], "path_900m.json: waypoints: the path F is 900 m"),
+    (["fly", "--map", "{in}/crown_1e6.json"], "crown_m"),
+    (["fly", "--map", "{in}/tree_x_1e7.json", "--camera", "oracle"], "trees[1].x"),
     # paper-tests, demo
     (["paper-tests", "--out", "afile"], "--out"),
     (["paper-tests", "--jobs", "0", "--out", "paper"], "--jobs"),
@@ -228,6 +260,23 @@ CASES = [
     (["evaluate", "--model", "oil_palm", "--data", "{in}/big_field.csv", "--seed", "-1"], "--seed"),
     (["evaluate", "--model", "oil_palm", "--data", "{in}/big_field.csv"], "big_field.csv"),
     (["detect", "--window", "10", "{in}/big_field.csv"], "--window"),
+    (["detect", "{in}/empty.png"], "empty.png: empty file (0 bytes)"),
+    (["detect", "{in}/empty.png", "--crown-px", "60"], "empty.png"),
+    (["detect", "{in}/empty.png", "--gsd", "1e9", "--crown-m", "0.4"], "--gsd"),
+    (["evaluate", "--model", "oil_palm", "--data", "{in}/big_field.csv", "--gsd", "1e9", "--crown-m", "0.4"],
+     "--gsd"),
+    (["evaluate", "--model", "oil_palm", "--data", "{in}/duplicated_crops.csv"],
+     "duplicated_crops.csv: line 3: crop pos/1.png already listed on line 2"),
+    (["train", "--species", "oil_palm", "--data", "{in}/big_field.csv", "--windows", "24,1000000000",
+      "--out", "keep.npz"], "--windows"),
+    (["train", "--species", "oil_palm", "--data", "{in}/big_field.csv", "--windows", "9" * 30,
+      "--out", "keep.npz"], "--windows"),
+    (["train", "--species", "oil_palm", "--data", "{in}/big_field.csv", "--reference-width", "1",
+      "--out", "keep.npz"], "--reference-width"),
+    (["train", "--species", "oil_palm", "--data", "{in}/big_field.csv", "--margin", "1e300",
+      "--out", "keep.npz"], "--margin"),
+    (["synth", "--out", "data", "--count", "2", "--ground", "{in}/empty.png", "--ground-gsd", "0.01"],
+     "empty.png: empty file"),
     # package, deploy
     (["package", "--out", "afile/x.jvpkg"], "--out"),
     (["package", "--out", "dir.jvpkg"], "--out"),
@@ -241,6 +290,14 @@ CASES = [
     (["plantation", "--seed", "-1"], "--seed"),
     (["plantation", "--columns", "0:0"], "--columns"),
     (["plantation", "--out", "afile/x.json"], "--out"),
+    (["plantation", "--columns", "1000000000"], "--columns"),
+    (["plantation", "--altitude-m", "1e6"], "--altitude-m"),
+    (["plantation", "--heading-deg", "nan"], "--heading-deg"),
+    (["plantation", "--column-length-m", "1e300"], "--column-length-m"),
+    (["plantation", "--bend-deg", "40", "--column-bends", "3"], "--bend-deg"),
+    (["plantation", "--profile", "paper"], "--profile"),
+    (["sweep", "--count", "2", "--altitude-m", "0.1", "--out", "sw"], "--altitude-m"),
+    (["sweep", "--count", "2", "--crowns", "{in}/duplicated_rows.csv", "--out", "sw"], "duplicated_rows.csv: line 3"),
     (["sweep", "--count", "0", "--out", "sw"], "--count"),
     (["sweep", "--count", "2", "--workers", "0", "--out", "sw"], "--workers"),
     (["sweep", "--count", "2", "--out", "keep.png"], "--out"),
@@ -249,6 +306,11 @@ CASES = [
     (["sweep", "--count", "2", "--model", "{in}/big_field.csv", "--out", "sw"], "--model"),
     (["sweep", "--count", "2", "--camera", "oracle", "--model", "oil_palm.npz", "--out", "sw"], "--model"),
     (["sweep", "--count", "2", "--app", "rust", "--out", "sw"], "--app"),
+] + [(["train", "--species", "oil_palm", "--data", path, "--out", "keep.npz"], named) for path, named in CSV_ROWS] + [
+    (["evaluate", "--model", "oil_palm", "--data", path], named) for path, named in CSV_ROWS] + [
+    (["split", "--data", path, "--out", "s"], named) for path, named in CSV_ROWS] + [
+    (["synth", "--out", "data", "--count", "2", "--crowns", path], named) for path, named in CSV_ROWS] + [
+    (["fly", "--map", "map1", "--crowns", path], named) for path, named in CSV_ROWS] + [
     # the command itself
     (["nosuch"], "nosuch"),
     ([], "command"),

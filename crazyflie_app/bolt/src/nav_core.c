@@ -245,9 +245,7 @@ static NavCommand stepFollow(NavCore* core, int32_t t_ms, const NavPose* pose) {
     goal = core->path[core->waypoint_index];
   }
   if (core->phase == NAV_PHASE_RETURN_TO_PATH && core->waypoint_index > 0) {
-    const double *a, *b;
-    navCurrentSegment(core, &a, &b);
-    if (navDistanceToSegment(pose->x, pose->y, a, b) < p->return_tolerance_m) {
+    if (navCrossTrack(core, pose) < p->return_tolerance_m) {
       navEnterPhase(core, NAV_PHASE_FOLLOW_PATH, t_ms);
     }
   }

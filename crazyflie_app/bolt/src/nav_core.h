@@ -300,9 +300,12 @@ int32_t navTreesAdd(NavTreeMemory* memory, double x, double y, int32_t t_ms, dou
                     int32_t* evicted, int32_t* num_evicted);
 /* After capacity was lowered: evict the farthest trees until T_d fits. Returns how many (ids in evicted). */
 int32_t navTreesEvictToCapacity(NavTreeMemory* memory, double mav_x, double mav_y, int32_t* evicted);
-/* Drop every stored tree within radius of a reached visited entry (that tree seen again). Returns how many;
- * their ids go to dropped[], the reached entries' ids to twins[] (at most NAV_MAX_TREES each). */
-int32_t navTreesAbsorbReached(NavTreeMemory* memory, double radius, int32_t* dropped, int32_t* twins);
+/* Drop every stored tree within radius of a reached visited entry (that tree seen again) into the visited
+ * list, not reached, at that entry's position (a full list forgets its entry farthest from the MAV first).
+ * Returns how many; their ids go to dropped[], the reached entries' ids to twins[] (at most NAV_MAX_TREES
+ * each). */
+int32_t navTreesAbsorbReached(NavTreeMemory* memory, double radius, int32_t t_ms, double mav_x, double mav_y,
+                              int32_t* dropped, int32_t* twins);
 /* True when a reached visited entry other than the one at index lies within radius of it. */
 bool navTreesNearReached(const NavTreeMemory* memory, int32_t index, double radius);
 /* Move a visited entry back into T_d (same id and position, hits, last seen when visited, image (u, v));

@@ -59,10 +59,11 @@ static int32_t takeDetection(NavCore* core, int32_t t_ms, int32_t k, int32_t* nu
   return tree_id;
 }
 
-/* Stored trees that are a reached tree seen again are dropped (the target too). */
-static void absorbReached(NavCore* core, int32_t t_ms) {
+/* Stored trees that are a reached tree seen again are dropped into the visited list (the target too). */
+static void absorbReached(NavCore* core, int32_t t_ms, const NavPose* pose_now) {
   int32_t dropped[NAV_MAX_TREES], twins[NAV_MAX_TREES];
-  const int32_t count = navTreesAbsorbReached(&core->memory, core->params.duplicate_radius_m, dropped, twins);
+  const int32_t count = navTreesAbsorbReached(&core->memory, core->params.duplicate_radius_m, t_ms, pose_now->x,
+                                              pose_now->y, dropped, twins);
   for (int32_t k = 0; k < count; k++) {
     NavEvent* e = navPushEvent(core, NAV_EVENT_TREE_ABSORBED, t_ms, dropped[k], 0.0, 0.0);
     if (e != NULL) {
@@ -117,6 +118,6 @@ int32_t navCoreOnFrame(NavCore* core, int32_t t_ms, const NavDetection* detectio
   for (int32_t i = 0; i < count; i++) {
     core->last_frame_ids[i] = core->merged_ids[core->owner[i]];
   }
-  absorbReached(core, t_ms);
+  absorbReached(core, t_ms, pose_now);
   return count;
 }

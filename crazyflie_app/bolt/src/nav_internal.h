@@ -37,6 +37,11 @@ int32_t navMergeDuplicates(NavCore* core, const NavDetection* detections, int32_
 double navDistanceToSegment(double px, double py, const double a[2], const double b[2]);
 void navCurrentSegment(const NavCore* core, const double** a, const double** b);
 bool navInPlantingColumn(const NavCore* core, double x, double y);
+/* How far beyond its end waypoint a segment is flown (PathFollower.end_reach_m), and where it ends. */
+double navEndReach(const NavParams* p);
+void navSegmentEnd(const NavCore* core, double end[2]);
+/* Distance of the MAV from the current segment, as flown (up to its end beyond the waypoint). */
+double navCrossTrack(const NavCore* core, const NavPose* pose);
 bool navWaypointReached(const NavCore* core, const NavPose* pose);
 void navFollowVelocity(const NavCore* core, const NavPose* pose, const double* goal, double* wx, double* wy);
 

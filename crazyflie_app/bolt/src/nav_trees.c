@@ -10,7 +10,8 @@
  * within the merge radius, no two detections of one frame to the same tree. It is done greedily on the
  * smallest (distance, detection, candidate order) pair left, which picks the same pairs as sorting all
  * of them (tree_memory.py) without a pair array (no RAM to spare on the Bolt). A stored tree within
- * app.dupRadius of a reached tree is that tree seen again: dropped (counted in absorbed).
+ * app.dupRadius of a reached tree is that tree seen again: dropped (counted in absorbed) into the visited list,
+ * not reached, at the reached tree's position, so that a second detection of it is not stored again.
  */
 #include <math.h>
 #include <string.h>
@@ -219,6 +220,18 @@ void navTreesUpdate(NavTreeMemory* memory, int32_t id, double x, double y, int32
   t->v = v;
 }
 
+/* Appends a visited entry; a full list forgets its entry farthest from the MAV first (tree_memory._append_visited). */
+static void appendVisited(NavTreeMemory* memory, int32_t id, double x, double y, int32_t t_ms, bool reached,
+                          bool revisit, double mav_x, double mav_y) {
+  const int32_t capacity = clampCapacity(memory->visited_capacity, NAV_MAX_VISITED);
+  while (memory->num_visited >= capacity) {
+    removeVisitedAt(memory, farthestEntry(memory, true, mav_x, mav_y, NULL, 0));
+    memory->visited_forgotten++;
+  }
+  NavVisited* entry = &memory->visited[memory->num_visited++];
+  *entry = (NavVisited){.id = id, .x = x, .y = y, .t_ms = t_ms, .reached = reached, .revisit = revisit};
+}
+
 bool navTreesMarkVisited(NavTreeMemory* memory, int32_t id, int32_t t_ms, double mav_x, double mav_y,
                          bool reached, bool revisit) {
   NavTree* t = navTreesGet(memory, id);
@@ -227,18 +240,7 @@ bool navTreesMarkVisited(NavTreeMemory* memory, int32_t id, int32_t t_ms, double
   }
   const NavTree tree = *t;
   removeTreeAt(memory, (int32_t)(t - memory->trees));
-  const int32_t capacity = clampCapacity(memory->visited_capacity, NAV_MAX_VISITED);
-  while (memory->num_visited >= capacity) {
-    removeVisitedAt(memory, farthestEntry(memory, true, mav_x, mav_y, NULL, 0));
-    memory->visited_forgotten++;
-  }
-  NavVisited* entry = &memory->visited[memory->num_visited++];
-  entry->id = tree.id;
-  entry->x = tree.x;
-  entry->y = tree.y;
-  entry->t_ms = t_ms;
-  entry->reached = reached;
-  entry->revisit = revisit;
+  appendVisited(memory, tree.id, tree.x, tree.y, t_ms, reached, revisit, mav_x, mav_y);
   return true;
 }
 
@@ -254,7 +256,8 @@ static int32_t reachedWithin(const NavTreeMemory* memory, double x, double y, do
   return 0;
 }
 
-int32_t navTreesAbsorbReached(NavTreeMemory* memory, double radius, int32_t* dropped, int32_t* twins) {
+int32_t navTreesAbsorbReached(NavTreeMemory* memory, double radius, int32_t t_ms, double mav_x, double mav_y,
+                              int32_t* dropped, int32_t* twins) {
   int32_t count = 0;
   int32_t i = 0;
   while (i < memory->num_trees) {
@@ -263,10 +266,18 @@ int32_t navTreesAbsorbReached(NavTreeMemory* memory, double radius, int32_t* dro
       i++;
       continue;
     }
+    double tx = 0.0, ty = 0.0;
+    for (int32_t k = 0; k < memory->num_visited; k++) {
+      if (memory->visited[k].id == twin) {
+        tx = memory->visited[k].x;
+        ty = memory->visited[k].y;
+      }
+    }
     dropped[count] = memory->trees[i].id;
     twins[count++] = twin;
     removeTreeAt(memory, i);
     memory->absorbed++;
+    appendVisited(memory, dropped[count - 1], tx, ty, t_ms, false, false, mav_x, mav_y);
   }
   return count;
 }

@@ -10,7 +10,8 @@ from host_tools.errors import ForaNavError
 from host_tools.sweep import conditions as cond
 from host_tools.sweep.report import build_report, failure_classes, wilson
 from host_tools.sweep.runner import fly_task
-from host_tools.sweep.specs import flight_spec, fly_command, make_specs
+from host_tools.sweep.specs import (TUNING_PLANTATION_SEEDS, flight_spec, fly_command, make_specs, plantation_seed,
+                                    seed_role)
 from host_tools.sweep.store import SweepStore
 from host_tools.plantation import PlantationRanges
 
@@ -27,6 +28,17 @@ def test_that_the_same_seed_gives_the_same_specs_whatever_the_count():
     assert json.dumps(short) == json.dumps(long[:3])
     assert [s["map"] for s in short] != [s["map"] for s in other]
     assert len({s["seed"] for s in long}) == 5
+
+
+def test_that_reporting_sweeps_fly_no_plantation_of_the_tuning_seeds():
+    # docs/sweeps.md: tuning sweep seeds 0-999 and plantation seeds below 10,000; reporting sweeps 1000-1999
+    assert (seed_role(1), seed_role(999), seed_role(1000), seed_role(1999), seed_role(2000)) == \
+        ("tuning", "tuning", "reporting", "reporting", "unassigned")
+    assert flight_spec(1001, 3, camera="oracle")["plantation_seed"] == plantation_seed(1001, 3)
+    tuning = {plantation_seed(seed, i) for seed in range(50) for i in range(500)}
+    reporting = {plantation_seed(seed, i) for seed in range(1000, 1010) for i in range(2000)}
+    assert not reporting & tuning
+    assert not any(seed in TUNING_PLANTATION_SEEDS for seed in reporting)
 
 
 @pytest.mark.parametrize("faults", sorted(cond.FAULT_PRESETS))
