@@ -20,6 +20,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from crazyflie_app.nav_types import focal_px
 from crazyflie_app.navigation_core import Command, Counters, Detection, Event, NavigationParams
 
 REPO = Path(__file__).resolve().parents[1]
@@ -63,7 +64,7 @@ class CParams(ctypes.Structure):
 
     @property
     def focal_px(self) -> float:
-        return (1.0 / self.cam_scale) * self.cam_width_px / 352.0
+        return focal_px(self.cam_scale, self.cam_width_px)
 
 
 class _Status(ctypes.Structure):

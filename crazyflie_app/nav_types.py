@@ -99,7 +99,20 @@ class NavigationParams:
 
     @property
     def focal_px(self) -> float:
-        return (1.0 / self.cam_scale) * self.cam_width_px / 352.0
+        return focal_px(self.cam_scale, self.cam_width_px)
+
+
+# A client may write any value into a PARAM (cfclient, cflib: docs/crtp.md); the camera model takes camScale and
+# camWidth at the nearest value it can divide by, so a write of 0 gives wrong geometry, never a crash.
+CAM_SCALE_MIN = 1e-4  # m per px per m of height: a 10,000 px focal length
+CAM_WIDTH_MIN_PX = 1
+
+
+def focal_px(cam_scale: float, cam_width_px: int) -> float:
+    """The focal length in pixels of the camera model (DESIGN.md): 1 / camScale at 352 px, scaled with the width."""
+    scale = cam_scale if cam_scale > CAM_SCALE_MIN else CAM_SCALE_MIN  # as nav_params.c: NaN too
+    width = cam_width_px if cam_width_px > CAM_WIDTH_MIN_PX else CAM_WIDTH_MIN_PX
+    return (1.0 / scale) * width / 352.0
 
 
 @dataclass

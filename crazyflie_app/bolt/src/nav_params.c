@@ -54,6 +54,13 @@ void navParamsDefaults(NavParams* p) {
   p->frame_capacity = 64;
 }
 
+/* A client may write any value into a PARAM: camScale and camWidth are taken at the nearest value the model can
+ * divide by (nav_types.py: CAM_SCALE_MIN, CAM_WIDTH_MIN_PX), so a write of 0 gives wrong geometry, not inf. */
+#define CAM_SCALE_MIN 1e-4
+#define CAM_WIDTH_MIN_PX 1
+
 double navFocalPx(const NavParams* p) {
-  return (1.0 / p->cam_scale) * (double)p->cam_width_px / 352.0;
+  const double scale = p->cam_scale > CAM_SCALE_MIN ? p->cam_scale : CAM_SCALE_MIN;
+  const int32_t width = p->cam_width_px > CAM_WIDTH_MIN_PX ? p->cam_width_px : CAM_WIDTH_MIN_PX;
+  return (1.0 / scale) * (double)width / 352.0;
 }
