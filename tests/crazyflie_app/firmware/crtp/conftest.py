@@ -6,7 +6,13 @@ first request, so the client meets the flight at its first tick), flies, and pri
 figures, and every 10 ms the values a log block can hold (``RECORDED``), read from the registry on the same
 tick as the server samples. A flight in another process keeps the two interpreters from sharing one GIL, as a
 real client and a real Crazyflie share nothing.
+
+``slow_until_reconnect_from_ms``: from that tick on, until a new client connects, the child's flight runs no
+faster than real time. A lockstep flight whose client has left runs as fast as the downlink or the CPU let it
+(15 simulated seconds in about a wall second), so a test that reconnects mid-flight would otherwise race the
+flight to its end.
 """
+import time
 import json
 import os
 import socket
@@ -50,6 +56,9 @@ def serve_flight() -> None:
             yield v_task_delay(RECORD_PERIOD_MS)
 
     cf.x_task_create(recorder(), "TEST_RECORDER", 0)
+    slow_from_ms = config.get("slow_until_reconnect_from_ms")
+    if slow_from_ms is not None and flight.crtp is not None:
+        cf.x_task_create(_real_time_until_reconnect(flight.crtp, slow_from_ms), "TEST_PACER", 0)
     print(json.dumps({"uri": flight.crtp.uri if flight.crtp else None}), flush=True)
     sys.stdin.readline()
     flight.run()
@@ -63,12 +72,26 @@ def serve_flight() -> None:
           flush=True)
 
 
+def _real_time_until_reconnect(server, from_ms: int):
+    """A task that, from ``from_ms``, sleeps a wall millisecond per simulated one until ``server`` counts a new
+    connection."""
+    from crazyflie_app.firmware import v_task_delay
+
+    yield v_task_delay(from_ms)
+    connections = server.stats.connections
+    while server.stats.connections == connections:
+        time.sleep(0.001)
+        yield v_task_delay(1)
+
+
 class FlightProcess:
     """A flight served over CRTP in a child process (see the module docstring)."""
 
-    def __init__(self, out_dir: Path, map_name: str = "map1", seed: int = 0, options: dict | None = None):
+    def __init__(self, out_dir: Path, map_name: str = "map1", seed: int = 0, options: dict | None = None,
+                 slow_until_reconnect_from_ms: int | None = None):
         self.out_dir = Path(out_dir)
-        config = {"map": map_name, "seed": seed, "out": str(self.out_dir), "options": options or {}}
+        config = {"map": map_name, "seed": seed, "out": str(self.out_dir), "options": options or {},
+                  "slow_until_reconnect_from_ms": slow_until_reconnect_from_ms}
         env = dict(os.environ, PYTHONPATH=str(REPO_ROOT))
         self.process = subprocess.Popen(
             [sys.executable, "-c", "from tests.crazyflie_app.firmware.crtp.conftest import serve_flight; "

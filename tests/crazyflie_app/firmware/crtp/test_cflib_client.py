@@ -63,7 +63,8 @@ def watched(tmp_path_factory):
     """The scripted flight of the module docstring -> what the client saw and what the flight did."""
     tmp = tmp_path_factory.mktemp("watched")
     port = free_scan_port()
-    child = FlightProcess(tmp / "flight", options={"crtp": "127.0.0.1:%d" % port, "max_time_s": MAX_TIME_S})
+    child = FlightProcess(tmp / "flight", options={"crtp": "127.0.0.1:%d" % port, "max_time_s": MAX_TIME_S},
+                          slow_until_reconnect_from_ms=FIRST_LEAVES_MS)
     try:
         first = Session(child.uri, tmp / "toc_cache")
         assert first.first_sent.wait(10), "cflib sent nothing"
