@@ -17,10 +17,10 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 # The C flight app (crazyflie_app/bolt, docs/bolt.md). capp: the pure core as a host shared library, loaded by
-# crazyflie_app/c_core.py (foranav fly --app c); capp-asan: the same under AddressSanitizer + UBSan, with the
+# crazyflie_app/bolt/c_core.py (foranav fly --app c); capp-asan: the same under AddressSanitizer + UBSan, with the
 # differential test and a flight run against it; bolt: the Bolt firmware with the app, from a firmware checkout.
 CAPP_DIR     := crazyflie_app/bolt
-# the core's files are nav_* (with the host-only nav_host.c), as in crazyflie_app/c_core.py
+# the core's files are nav_* (with the host-only nav_host.c), as in crazyflie_app/bolt/c_core.py
 CAPP_SOURCES := $(sort $(wildcard $(CAPP_DIR)/src/nav_*.c))
 CAPP_HEADERS := $(sort $(wildcard $(CAPP_DIR)/src/nav_*.h))
 CAPP_CFLAGS  := -std=c11 -O2 -Wall -Wextra -Werror -fPIC -shared

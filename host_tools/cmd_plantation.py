@@ -25,8 +25,8 @@ import re
 
 from host_tools import argtypes, fileio
 from host_tools.errors import ForaNavError
-from host_tools.plantation import (DEFAULT_PROFILE, INTEGER_RANGES, PROFILES, PlantationRanges, generate,
-                                   plantation_dict)
+from host_tools.plantation import INTEGER_RANGES, generate, plantation_dict
+from host_tools.plantation_ranges import DEFAULT_PROFILE, PROFILES, PlantationRanges
 
 
 def add_range_arguments(parser: argparse.ArgumentParser) -> None:

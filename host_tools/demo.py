@@ -13,7 +13,7 @@ import sys
 import time
 from pathlib import Path
 
-from crazyflie_app.navigation_core import NavigationParams
+from crazyflie_app.app.navigation_core import NavigationParams
 from host_tools import argtypes, fileio
 from host_tools.flight.cmd_fly import add_plant_argument, print_table
 from host_tools.flight.components import check_crtp_endpoint, plant_config

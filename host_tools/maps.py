@@ -28,7 +28,8 @@ from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
-from crazyflie_app.path_following import COLUMN_FACTOR, distance_to_segment, within_column
+from crazyflie_app.app.nav_types import COLUMN_FACTOR
+from crazyflie_app.app.path_following import distance_to_segment, within_column
 from host_tools.errors import ForaNavError
 from host_tools import fileio
 

@@ -46,5 +46,5 @@ from crazyflie_app.firmware.commander import (COMMANDER_PRIORITY_CRTP, COMMANDER
                                               setpoint_t)
 from crazyflie_app.firmware.freertos import f2t, m2t, t2m, v_task_delay, PORT_MAX_DELAY  # noqa: F401
 from crazyflie_app.firmware.logparam import FirmwareAssertError, LOG_VARID_INVALID, PARAM_VARID_INVALID  # noqa
-from crazyflie_app.firmware.mav_model import MavModelConfig  # noqa: F401
+from crazyflie_app.firmware.reduced.mav_model import MavModelConfig  # noqa: F401
 from crazyflie_app.firmware.system import Crazyflie  # noqa: F401

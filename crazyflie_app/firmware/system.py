@@ -14,19 +14,17 @@ from collections.abc import Sequence
 from typing import Any
 
 from crazyflie_app.firmware import freertos
-from crazyflie_app.firmware.commander import Commander
 from crazyflie_app.firmware.logparam import (LOG_FLOAT, LOG_UINT8, PARAM_UINT8, LogParamRegistry, log_add,
                                               log_group, param_add, param_group)
-from crazyflie_app.firmware.mav_model import MavModel, MavModelConfig
+from crazyflie_app.firmware.reduced.mav_model import MavModelConfig
+from crazyflie_app.firmware.reduced.stack import ReducedFlightStack
 from crazyflie_app.firmware.sil.plant import FirmwareFlightStack
 from crazyflie_app.firmware.sil.stack import FirmwarePlantConfig
-from crazyflie_app.firmware.supervisor import SUPERVISOR_STATES, Supervisor
+from crazyflie_app.firmware.supervisor import SUPERVISOR_STATES
 from crazyflie_app.firmware.uart2 import Uart2
 
 STABILIZER_TASK_PRI = 5
 UART2_RX_TASK_PRI = 5  # stands in for the USART2 receive interrupt
-POSITION_RATE_HZ = 100  # RATE_100_HZ: the position controller's rate
-STABILIZER_PERIOD_MS = 1000 // POSITION_RATE_HZ
 PLANTS = ("reduced", "firmware")  # the reduced model (default) or the real firmware over a rigid body
 # platform_bolt.c / platform_cf2.c: the name the platform service gives a client (require_arming: the Bolt)
 DEVICE_TYPE_NAMES = {True: "Crazyflie Bolt 1.1", False: "Crazyflie 2.1"}
@@ -126,7 +124,7 @@ class Crazyflie:
                                              model_config or FirmwarePlantConfig(), start,
                                              bounds or (start[0], start[1], start[0], start[1]))
         elif plant == "reduced":
-            self.stack = ReducedFlightStack(self.scheduler, self.console, seed, model_config, start, require_arming)
+            self.stack = ReducedFlightStack(self.scheduler, self.console.debug_print, seed, model_config, start, require_arming)
         else:
             raise ValueError("plant must be one of %s, got %r" % (", ".join(PLANTS), plant))
         self.commander = self.stack.commander
@@ -197,38 +195,3 @@ class Crazyflie:
         close = getattr(self.stack, "close", None)
         if close is not None:
             close()
-
-
-class ReducedFlightStack:
-    """The default plant: the Python commander and supervisor and the reduced closed-loop MAV model
-    (commander.py, supervisor.py, mav_model.py), stepped by a stabilizer task at the position loop's rate."""
-
-    def __init__(self, scheduler: freertos.Scheduler, console: Console, seed: int,
-                 model_config: MavModelConfig | None, start: tuple[float, float, float], require_arming: bool):
-        self.scheduler = scheduler
-        self.commander = Commander(scheduler)
-        # the Bolt (bolt_defconfig: CONFIG_MOTORS_REQUIRE_ARMING=y); require_arming=False: the CF2's auto-arming
-        self.supervisor = Supervisor(require_arming, console=lambda text: console.debug_print("SUP", text))
-        self.model = MavModel(model_config, seed=seed, start=start)
-        self._last_physics_tick = 0
-        self._active_setpoint = self.commander.commander_get_setpoint()
-        self._motors_on = False
-
-    def stabilizer_task(self) -> freertos.Task:
-        """commanderGetSetpoint -> supervisorUpdate -> override -> controller + plant, every 10 ms or on a
-        watchdog threshold, whichever comes first."""
-        while True:
-            now = self.scheduler.x_task_get_tick_count()
-            dt = (now - self._last_physics_tick) / 1000.0
-            self._last_physics_tick = now
-            setpoint = self.commander.commander_get_setpoint()
-            # the plant ran under the previous state up to now; then the supervisor looks at the new age
-            self.model.step(dt, self._active_setpoint, self._motors_on)
-            self.supervisor.supervisor_update(now, setpoint)
-            self._active_setpoint = self.supervisor.supervisor_override_setpoint(setpoint)
-            self._motors_on = self.supervisor.motors_running(setpoint)
-            delay = STABILIZER_PERIOD_MS
-            event = self.supervisor.next_event_tick(now, setpoint)
-            if event is not None:
-                delay = min(delay, event - now)
-            yield freertos.v_task_delay(delay)

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from host_tools.detection import common, reference, synthetic
-from host_tools.detection.threads import single_threaded
+from host_tools.threads import single_threaded
 from host_tools.jevois_host import DEFAULT_MODULE_DIR
 
 import foranav_detector as detector_core

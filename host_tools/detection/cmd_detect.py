@@ -15,7 +15,7 @@ import math
 import sys
 
 from host_tools.detection import common, dataset
-from host_tools.detection.threads import single_threaded
+from host_tools.threads import single_threaded
 from host_tools.errors import ForaNavError
 
 import foranav_detector as detector_core

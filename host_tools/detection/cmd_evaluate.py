@@ -18,7 +18,7 @@ import math
 from host_tools import fileio
 from host_tools.detection import common, dataset, evaluation
 from host_tools.detection.cmd_detect import MIN_CROWN_PX
-from host_tools.detection.threads import single_threaded
+from host_tools.threads import single_threaded
 from host_tools.errors import ForaNavError
 from host_tools.plotting import plt
 

@@ -19,7 +19,7 @@ from pathlib import Path
 from host_tools import annotations, argtypes, fileio
 from host_tools.detection import cnn, dataset, evaluation, report, training
 from host_tools.detection.progress import Progress
-from host_tools.detection.threads import single_threaded
+from host_tools.threads import single_threaded
 from host_tools.errors import ForaNavError
 
 import foranav_colour as colours

@@ -19,7 +19,7 @@ import numpy as np
 
 from host_tools.detection import dataset, evaluation, training
 from host_tools.detection.svm import train_linear_svm
-from host_tools.detection.threads import single_threaded
+from host_tools.threads import single_threaded
 
 import foranav_features as features
 

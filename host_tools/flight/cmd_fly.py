@@ -1,6 +1,6 @@
 """Fly a map with the Crazyflie navigation app on the emulated firmware.
 
-The app (crazyflie_app/navigation.py) runs on the firmware emulation; a camera on the other end of a real
+The app (crazyflie_app/app/navigation.py) runs on the firmware emulation; a camera on the other end of a real
 pseudo-terminal sends it JeVois serial lines. --camera sim (the default) renders each frame from the MAV's
 true pose with the plantation simulator and runs the unchanged JeVois module on it (~9 FPS with one frame
 of latency, as in the paper; --fps and --latency-ms change that); --camera oracle is an ideal detector
@@ -43,7 +43,7 @@ import time
 from pathlib import Path
 from typing import TextIO
 
-from crazyflie_app.navigation_core import NavigationParams
+from crazyflie_app.app.navigation_core import NavigationParams
 from host_tools import argtypes, fileio
 from host_tools.errors import ForaNavError
 from host_tools.flight import camera_factory, run_flight

@@ -19,7 +19,7 @@ from crazyflie_app.firmware.crtp import CrtpServer
 from crazyflie_app.firmware.freertos import Task
 from crazyflie_app.firmware.sil.stack import FirmwarePlantConfig, FirmwarePlantUnavailable, check_available
 from crazyflie_app.firmware.supervisor import LANDED, LOCKED, WARNING_LEVEL_OUT
-from crazyflie_app.navigation_core import (PHASE_APPROACH, PHASE_DONE, PHASE_NAMES, PHASE_NO_CAMERA, PHASE_NO_DECK,
+from crazyflie_app.app.navigation_core import (PHASE_APPROACH, PHASE_DONE, PHASE_NAMES, PHASE_NO_CAMERA, PHASE_NO_DECK,
                                            rotate)
 from host_tools.errors import ForaNavError
 from host_tools.flight.registry import Camera, app_factory

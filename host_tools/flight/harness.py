@@ -30,8 +30,8 @@ before the clock moves on, so the same map and seed give the same summary and th
     params         dict of app parameters to set before flight, by 'group.name' ('app.settleRadius': 5)
     start          (x, y) take-off point (default: the first waypoint)
     mavlink        live MAVLink output URL (e.g. 'udpout:127.0.0.1:14550'); needs out_dir (it tees the tlog)
-    app            the flight app: 'python' (crazyflie_app/navigation.py, default) or 'c' (the C core of
-                   crazyflie_app/bolt, crazyflie_app/c_app.py); both read the camera through the emulated UART2
+    app            the flight app: 'python' (crazyflie_app/app/navigation.py, default) or 'c' (the C core of
+                   crazyflie_app/bolt, crazyflie_app/bolt/c_app.py); both read the camera through the emulated UART2
     decks          decks present (default ('bcFlow2', 'bcLoco'))
     app            the flight app under test, by registered name (default 'python'; see register_app)
     plant          'reduced' (default: the reduced MAV model) or 'firmware' (the real firmware, docs/firmware-plant.md)

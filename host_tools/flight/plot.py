@@ -2,7 +2,7 @@
 import os
 from typing import Any
 
-from crazyflie_app.navigation_core import PHASE_RECOVERY
+from crazyflie_app.app.navigation_core import PHASE_RECOVERY
 from host_tools import fileio
 from host_tools.flight.components import FlightView
 from host_tools.maps import PlantationMap

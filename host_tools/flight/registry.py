@@ -6,11 +6,11 @@ import importlib
 from collections.abc import Callable, Sequence
 from typing import Any, Protocol
 
-from crazyflie_app.c_app import CNavigationApp  # the C core's library is loaded (built if stale) on first use
+from crazyflie_app.bolt.c_app import CNavigationApp  # the C core's library is loaded (built if stale) on first use
 from crazyflie_app.firmware import Crazyflie
 from crazyflie_app.firmware.system import PLANTS
-from crazyflie_app.navigation import NavigationApp
-from crazyflie_app.uart2_link import Uart2Link
+from crazyflie_app.app.navigation import NavigationApp
+from crazyflie_app.app.uart2_link import Uart2Link
 from host_tools.argtypes import parse_udp_endpoint
 from host_tools.errors import ForaNavError
 

@@ -18,7 +18,7 @@ import bisect
 import math
 
 from crazyflie_app.firmware import v_task_delay
-from crazyflie_app.navigation_core import PHASE_FOLLOW_PATH, PHASE_NAMES, rotate
+from crazyflie_app.app.navigation_core import PHASE_FOLLOW_PATH, PHASE_NAMES, rotate
 from host_tools.errors import ForaNavError
 from host_tools.flight import harness
 from host_tools.flight.vision_camera import DetectionScore, parse_detections, truth_in_frame

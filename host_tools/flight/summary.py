@@ -3,7 +3,7 @@ import math
 from pathlib import Path
 
 from crazyflie_app.firmware.supervisor import LOCKED
-from crazyflie_app.navigation_core import PHASE_DONE, PHASE_NO_CAMERA
+from crazyflie_app.app.navigation_core import PHASE_DONE, PHASE_NO_CAMERA
 from host_tools.flight.components import FlightView
 from host_tools.flight.stats import mean_ci95
 

@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from host_tools.detection.threads import single_threaded
+from host_tools.threads import single_threaded
 from host_tools.errors import ForaNavError
 from host_tools.flight.harness import Progress, register_camera, run_flight
 from host_tools.jevois_host import ModuleRunner, NullLog

@@ -38,7 +38,7 @@ from host_tools.flight.cmd_fly import add_plant_argument
 from host_tools.flight.components import plant_config
 from host_tools.flight.vision_camera import model_option
 from host_tools.maps import SPECIES
-from host_tools.plantation import PlantationRanges
+from host_tools.plantation_ranges import PlantationRanges
 from host_tools.sim.cli_args import appearance_from_args
 from host_tools.sweep import report as report_mod
 from host_tools.sweep.conditions import FAULT_PRESETS, preset

@@ -14,7 +14,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from host_tools import fileio
-from host_tools.plantation import PlantationRanges
+from host_tools.plantation_ranges import PlantationRanges
 from host_tools.plotting import plt
 from host_tools.sweep.specs import fly_command, plantation_command, seed_role
 

@@ -16,7 +16,8 @@ from collections.abc import Sequence
 import numpy as np
 
 from host_tools.maps import map_to_dict
-from host_tools.plantation import DEFAULT_PROFILE, PROFILES, PlantationRanges, generate, profile_of
+from host_tools.plantation import generate
+from host_tools.plantation_ranges import DEFAULT_PROFILE, PROFILES, PlantationRanges, profile_of
 from host_tools.sweep import conditions as cond
 
 SEED_LIMIT = 2 ** 31 - 1

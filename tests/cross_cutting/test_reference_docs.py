@@ -2,7 +2,7 @@
 import subprocess
 import sys
 
-from crazyflie_app import navigation
+from crazyflie_app.app import navigation
 from host_tools import cli, docs_gen
 from host_tools.jevois_host import libjevois, load_module
 
@@ -21,6 +21,12 @@ def test_that_the_readme_command_table_is_generated_and_current():
     assert not docs_gen.readme_is_stale(), "stale README.md command table: run make docs"
     for name in cli.COMMANDS:
         assert "| `foranav %s` |" % name in text
+
+
+def test_that_the_design_picture_is_what_the_code_draws():
+    text = docs_gen.DESIGN.read_text(encoding="utf-8")
+    assert docs_gen.PICTURE_BEGIN in text and "NavigationCore.step" in text
+    assert not docs_gen.design_is_stale(), "stale docs/DESIGN.md picture: run make docs"
 
 
 def test_that_the_readme_demo_output_is_what_the_demo_prints():

@@ -8,8 +8,8 @@ import pytest
 
 from host_tools import cli
 from host_tools.maps import ALTITUDE_RANGE_M, COLUMN_RULE_FACTOR, distance_to_path, load_map, map_from_dict
-from host_tools.plantation import (AMBIGUITY_MARGIN_M, APP_CROWN_M, MAX_GROUND_MPX, PROFILES, PlantationRanges,
-                                   generate, plantation_dict)
+from host_tools.plantation import MAX_GROUND_MPX, generate, plantation_dict
+from host_tools.plantation_ranges import AMBIGUITY_MARGIN_M, APP_CROWN_M, PROFILES, PlantationRanges
 from host_tools.sim.world import MAX_MOSAIC_PIXELS, _bounds
 from host_tools.sim.camera import METRES_PER_PIXEL_PER_METRE_AT_352
 from host_tools.sweep.specs import plantation_command, ranges_arguments

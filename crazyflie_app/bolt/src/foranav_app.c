@@ -1,6 +1,6 @@
 /*
  * ForaNav flight app for the Crazyflie Bolt: the thin firmware adapter around the pure navigation core
- * (nav_core.h, nav_*.c), the C twin of crazyflie_app/navigation.py.
+ * (nav_core.h, nav_*.c), the C twin of crazyflie_app/app/navigation.py.
  *
  * appMain waits for the system, checks the decks (deck.bcFlow2 required, deck.bcLoco advised), resolves the
  * stateEstimate log ids once, waits 3 s, waits for the camera (app.camWaitMs, else NO_CAMERA: never armed),

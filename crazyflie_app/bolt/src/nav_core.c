@@ -1,5 +1,5 @@
 /*
- * Algorithm 1 as a state machine: the C port of crazyflie_app/navigation_core.py (read its docstring for the
+ * Algorithm 1 as a state machine: the C port of crazyflie_app/app/navigation_core.py (read its docstring for the
  * design; function names here follow its methods). Phases:
  *
  *   BOOT -> TAKEOFF -> FOLLOW_PATH <-> APPROACH <-> RECOVERY
@@ -12,47 +12,6 @@
 #include <string.h>
 
 #include "nav_internal.h"
-
-static const double INITIAL_VELOCITY_STD = 100.0; /* px/s, PixelKalmanFilter default */
-
-/* -- events and phases ---------------------------------------------------------------------------------- */
-
-NavEvent* navPushEvent(NavCore* core, NavEventKind kind, int32_t t_ms, int32_t tree_id, double x, double y) {
-  if (core->num_events >= NAV_MAX_EVENTS) {
-    core->events_dropped++;
-    return NULL;
-  }
-  NavEvent* e = &core->events[core->num_events++];
-  *e = (NavEvent){.kind = kind, .t_ms = t_ms, .tree_id = tree_id, .x = x, .y = y}; /* a, b, n, variant: 0 */
-  return e;
-}
-
-void navEnterPhase(NavCore* core, NavPhase phase, int32_t t_ms) {
-  if (phase != core->phase) {
-    core->phase = phase;
-    core->phase_since = t_ms;
-    NavEvent* e = navPushEvent(core, NAV_EVENT_PHASE, t_ms, core->target_id, 0.0, 0.0);
-    if (e != NULL) {
-      e->n = (int32_t)phase;
-    }
-  }
-}
-
-NavCommand navHover(const NavCore* core, double vx, double vy) {
-  NavCommand c = {NAV_CMD_HOVER, vx, vy, core->params.altitude_m};
-  return c;
-}
-
-NavCommand navNullCommand(void) {
-  NavCommand c = {NAV_CMD_NULL, 0.0, 0.0, 0.0};
-  return c;
-}
-
-void navDropTarget(NavCore* core) {
-  core->target_id = 0;
-  core->has_filter = false;
-  core->captured = false;
-}
 
 /* -- init ----------------------------------------------------------------------------------------------- */
 
@@ -78,47 +37,12 @@ void navCoreAbortNoDeck(NavCore* core, int32_t t_ms) { navEnterPhase(core, NAV_P
 
 void navCoreAbortNoCamera(NavCore* core, int32_t t_ms) { navEnterPhase(core, NAV_PHASE_NO_CAMERA, t_ms); }
 
-const NavTree* navCoreTarget(const NavCore* core) {
-  return core->target_id ? navTreesGet((NavTreeMemory*)&core->memory, core->target_id) : NULL;
-}
-
 int32_t navCoreDrainEvents(NavCore* core, NavEvent* out, int32_t max_events) {
   const int32_t n = core->num_events < max_events ? core->num_events : max_events;
   memcpy(out, core->events, (size_t)n * sizeof(NavEvent));
   memmove(core->events, core->events + n, (size_t)(core->num_events - n) * sizeof(NavEvent));
   core->num_events -= n;
   return n;
-}
-
-/* -- tracking ------------------------------------------------------------------------------------------- */
-
-void navStartTracking(NavCore* core, int32_t t_ms, double u, double v) {
-  const NavParams* p = &core->params;
-  navKalmanInit(&core->filter, u, v, p->kf_measurement_std_px, p->kf_accel_psd, INITIAL_VELOCITY_STD);
-  core->has_filter = true;
-  core->filter_t_ms = t_ms;
-  core->has_settle_since = false;
-  core->has_captured_since = false;
-  core->servo_integral[0] = core->servo_integral[1] = 0.0;
-  core->has_recovery_since = false;
-  navEnterPhase(core, NAV_PHASE_APPROACH, t_ms);
-}
-
-/* -- a target done -------------------------------------------------------------------------------------- */
-
-/* A target is done (reached, abandoned or evicted): back to the path, or, while going back for abandoned trees
- * after the last waypoint, on to the next one or to landing. */
-NavCommand navAfterTree(NavCore* core, int32_t t_ms, const NavPose* pose) {
-  if (!core->revisiting) {
-    navEnterPhase(core, NAV_PHASE_RETURN_TO_PATH, t_ms);
-    return navHover(core, 0.0, 0.0);
-  }
-  core->revisiting = false;
-  if (navStartRevisit(core, t_ms, pose)) {
-    return navHover(core, 0.0, 0.0);
-  }
-  navEnterPhase(core, NAV_PHASE_LAND, t_ms);
-  return navStepLand(core, t_ms);
 }
 
 /* -- visual approach ------------------------------------------------------------------------------------ */

@@ -1,5 +1,5 @@
 /*
- * ForaNav navigation core: the pure C port of crazyflie_app/navigation_core.py (Algorithm 1 as a state
+ * ForaNav navigation core: the pure C port of crazyflie_app/app/navigation_core.py (Algorithm 1 as a state
  * machine), with the pixel Kalman filter (nav_kalman.c), the tree memory (nav_trees.c) and the camera's
  * serial line assembler and parser (nav_serial.c).
  *

@@ -1,5 +1,5 @@
 /*
- * One camera frame into the core (crazyflie_app/frame_input.py and NavigationCore.on_frame): ground points,
+ * One camera frame into the core (crazyflie_app/app/frame_input.py and NavigationCore.on_frame): ground points,
  * duplicates merged, association with T_d, new trees stored, the target's filter updated.
  */
 #include "nav_internal.h"

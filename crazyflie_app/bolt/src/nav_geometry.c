@@ -1,5 +1,5 @@
 /*
- * Camera geometry (crazyflie_app/camera_geometry.py): body/world rotation, pixel -> ground point, the ego-motion
+ * Camera geometry (crazyflie_app/app/camera_geometry.py): body/world rotation, pixel -> ground point, the ego-motion
  * correction of a detection, the pose history of the latency lookup, and the merge of duplicate detections.
  */
 #include <math.h>

@@ -1,5 +1,5 @@
 /*
- * Host-only entry points of the shared library (build/libforanav_nav.so) that crazyflie_app/c_core.py loads
+ * Host-only entry points of the shared library (build/libforanav_nav.so) that crazyflie_app/bolt/c_core.py loads
  * with ctypes: the core and its camera input behind one heap object, flat arguments, snapshot getters.
  * Not part of the Bolt build (src/Kbuild does not list it): on the Bolt, foranav_app.c owns one static app.
  */

@@ -1,6 +1,6 @@
 /*
- * The core's internal functions, shared between its nav_*.c files: nav_core.c (the state machine) and one
- * file per job, as the Python modules (nav_geometry.c: camera_geometry.py, nav_path.c: path_following.py,
+ * The core's internal functions, shared between its nav_*.c files: nav_core.c (the state machine), nav_state.c
+ * (the state changes every job shares, the lowest layer) and one file per job, as the Python modules (nav_geometry.c: camera_geometry.py, nav_path.c: path_following.py,
  * nav_servo.c: visual_servo.py, nav_recovery.c: recovery.py, nav_vertical.c: vertical.py, nav_link.c:
  * link_watch.py, nav_frame.c: frame_input.py). Private: the public API, used by the ctypes binding and the
  * firmware adapter, is nav_core.h.
@@ -13,14 +13,13 @@
 static inline double maxd(double a, double b) { return a > b ? a : b; }
 static inline double mind(double a, double b) { return a < b ? a : b; }
 
-/* events and phases (nav_core.c) */
+/* events, phases, commands and the target (nav_state.c) */
 NavEvent* navPushEvent(NavCore* core, NavEventKind kind, int32_t t_ms, int32_t tree_id, double x, double y);
 void navEnterPhase(NavCore* core, NavPhase phase, int32_t t_ms);
 NavCommand navHover(const NavCore* core, double vx, double vy);
 NavCommand navNullCommand(void);
 void navDropTarget(NavCore* core);
 void navStartTracking(NavCore* core, int32_t t_ms, double u, double v);
-NavCommand navAfterTree(NavCore* core, int32_t t_ms, const NavPose* pose);
 
 /* camera geometry (nav_geometry.c) */
 void navRotate(double yaw_deg, double bx, double by, double* wx, double* wy); /* body -> world */
@@ -59,6 +58,7 @@ int32_t navTreesEntry(const NavTreeMemory* memory, bool visited, int32_t index, 
 /* Whether entry index of T_d or of the visited list may be chosen. */
 typedef bool (*NavEligible)(const NavCore* core, int32_t index);
 int32_t navNearest(const NavCore* core, const NavPose* pose, bool visited, NavEligible eligible);
+NavCommand navAfterTree(NavCore* core, int32_t t_ms, const NavPose* pose);
 NavCommand navAbandonTarget(NavCore* core, int32_t t_ms, const NavPose* pose, const NavTree* tree, bool unseen);
 NavCommand navStepRecovery(NavCore* core, int32_t t_ms, const NavPose* pose);
 void navBeginRecovery(NavCore* core, int32_t t_ms, const NavTree* tree, double e_d, bool counted);

@@ -1,5 +1,5 @@
 /*
- * The camera link watch (crazyflie_app/link_watch.py): hold while the camera is silent in flight, land when it
+ * The camera link watch (crazyflie_app/app/link_watch.py): hold while the camera is silent in flight, land when it
  * stays silent.
  */
 #include "nav_internal.h"

@@ -1,5 +1,5 @@
 /*
- * The parameters' defaults: NavigationParams of crazyflie_app/nav_types.py (the app's PARAM table).
+ * The parameters' defaults: NavigationParams of crazyflie_app/app/nav_types.py (the app's PARAM table).
  */
 #include <string.h>
 

@@ -1,5 +1,5 @@
 /*
- * Path following (crazyflie_app/path_following.py): the current segment of F, the planting column around it,
+ * Path following (crazyflie_app/app/path_following.py): the current segment of F, the planting column around it,
  * the waypoint rule and the carrot velocity along the segment. A segment is flown navEndReach beyond its end
  * waypoint, until the rest of the planting column beyond it has been in whole view.
  */

@@ -1,10 +1,25 @@
 /*
- * Recovery (crazyflie_app/recovery.py): flying to s_t by memory when the target is lost, giving it up, and the
+ * Recovery (crazyflie_app/app/recovery.py): flying to s_t by memory when the target is lost, giving it up, and the
  * one revisit of trees abandoned while hidden.
  */
 #include <math.h>
 
 #include "nav_internal.h"
+
+/* A target is done (reached, abandoned or evicted): back to the path, or, while going back for abandoned trees
+ * after the last waypoint, on to the next one or to landing. */
+NavCommand navAfterTree(NavCore* core, int32_t t_ms, const NavPose* pose) {
+  if (!core->revisiting) {
+    navEnterPhase(core, NAV_PHASE_RETURN_TO_PATH, t_ms);
+    return navHover(core, 0.0, 0.0);
+  }
+  core->revisiting = false;
+  if (navStartRevisit(core, t_ms, pose)) {
+    return navHover(core, 0.0, 0.0);
+  }
+  navEnterPhase(core, NAV_PHASE_LAND, t_ms);
+  return navStepLand(core, t_ms);
+}
 
 /* Give the target up. unseen: recovery timed out without seeing it again (hidden); such a tree is flagged for
  * one more try before landing, unless this already was that try. */

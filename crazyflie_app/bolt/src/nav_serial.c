@@ -1,6 +1,6 @@
 /*
  * The camera's serial lines on the flight controller (the port of jevois_module/ForaNavTrees/foranav_serial.py,
- * parse side, and of NavigationApp.on_camera_line / _end_frame in crazyflie_app/navigation.py).
+ * parse side, and of NavigationApp.on_camera_line / _end_frame in crazyflie_app/app/navigation.py).
  *
  *   T2 x y               one detected tree, standardized coordinates (centre 0 0, x -1000..1000, y -750..750)
  *   N2 id x y w h        one detected tree with a species label and box size

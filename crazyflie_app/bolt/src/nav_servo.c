@@ -1,5 +1,5 @@
 /*
- * The visual servo (crazyflie_app/visual_servo.py): the servo law, the pixel filter's prediction, the relaxed
+ * The visual servo (crazyflie_app/app/visual_servo.py): the servo law, the pixel filter's prediction, the relaxed
  * reached rule and the bounded integral.
  */
 #include <math.h>

@@ -1,5 +1,5 @@
 /*
- * Take-off and landing (crazyflie_app/vertical.py).
+ * Take-off and landing (crazyflie_app/app/vertical.py).
  */
 #include <math.h>
 

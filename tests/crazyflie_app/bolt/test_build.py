@@ -9,8 +9,8 @@ import subprocess
 
 import pytest
 
-from crazyflie_app import c_core
-from crazyflie_app.nav_types import POSE_HISTORY_LENGTH
+from crazyflie_app.bolt import c_core
+from crazyflie_app.app.nav_types import POSE_HISTORY_LENGTH
 
 CORE_SOURCES = tuple(name for name in c_core.SOURCES if name != "nav_host.c")  # nav_host.c: host only
 BOLT_DEFINES = ("-DNAV_NO_PRINTF_FLOAT", "-DNAV_NO_STRTOD")

@@ -9,11 +9,11 @@ import sys
 
 import pytest
 
-from crazyflie_app import c_core
-from crazyflie_app.c_app import CNavigationApp
+from crazyflie_app.bolt import c_core
+from crazyflie_app.bolt.c_app import CNavigationApp
 from crazyflie_app.firmware import COMMANDER_PRIORITY_DISABLE, Crazyflie, v_task_delay
-from crazyflie_app.navigation import BOOT_DELAY_MS, LOG_TABLE, PARAM_TABLE, PRE_TAKEOFF_DELAY_MS
-from crazyflie_app.navigation_core import (PHASE_FOLLOW_PATH, PHASE_NO_CAMERA, PHASE_NO_DECK, PHASE_TAKEOFF,
+from crazyflie_app.app.navigation import BOOT_DELAY_MS, LOG_TABLE, PARAM_TABLE, PRE_TAKEOFF_DELAY_MS
+from crazyflie_app.app.navigation_core import (PHASE_FOLLOW_PATH, PHASE_NO_CAMERA, PHASE_NO_DECK, PHASE_TAKEOFF,
                                            NavigationParams)
 from host_tools.flight import run_flight
 from host_tools.flight.oracle import OracleCamera

@@ -17,8 +17,8 @@ import math
 import numpy as np
 import pytest
 
-from crazyflie_app.c_core import CNavigationCore, c_params
-from crazyflie_app.navigation_core import (PHASE_DONE, PHASE_NAMES, Detection, NavigationCore, NavigationParams,
+from crazyflie_app.bolt.c_core import CNavigationCore, c_params
+from crazyflie_app.app.navigation_core import (PHASE_DONE, PHASE_NAMES, Detection, NavigationCore, NavigationParams,
                                            Pose, rotate, unrotate)
 from host_tools.maps import load_map, map_from_dict
 

@@ -8,7 +8,7 @@ from crazyflie_app.firmware import (COMMANDER_PRIORITY_CRTP, COMMANDER_PRIORITY_
                                     LOG_VARID_INVALID, MavModelConfig, PARAM_VARID_INVALID, PORT_MAX_DELAY,
                                     modeAbs, setpoint_t, v_task_delay)
 from crazyflie_app.firmware.freertos import Scheduler
-from crazyflie_app.firmware.mav_model import MavModel
+from crazyflie_app.firmware.reduced.mav_model import MavModel
 from crazyflie_app.firmware.supervisor import FLYING, LANDED, LOCKED, WARNING_LEVEL_OUT
 
 from .conftest import HEIGHT, HEIGHT_TOLERANCE, hover

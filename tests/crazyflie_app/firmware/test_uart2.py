@@ -3,11 +3,11 @@ bytes silently when full. Both apps keep up with 8 T2 lines + MARK STOP per fram
 falls behind loses bytes, as on the Bolt."""
 import pytest
 
-from crazyflie_app.c_app import CNavigationApp
+from crazyflie_app.bolt.c_app import CNavigationApp
 from crazyflie_app.firmware import PORT_MAX_DELAY, Crazyflie, v_task_delay
 from crazyflie_app.firmware.uart2 import RX_BUFFER_BYTES
-from crazyflie_app.navigation import BOOT_DELAY_MS, NavigationApp
-from crazyflie_app.uart2_link import Uart2Link
+from crazyflie_app.app.navigation import BOOT_DELAY_MS, NavigationApp
+from crazyflie_app.app.uart2_link import Uart2Link
 from host_tools.flight.wire import PtyWire
 from jevois_module.ForaNavTrees import foranav_serial as fs
 

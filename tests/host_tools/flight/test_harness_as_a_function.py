@@ -6,8 +6,8 @@ import pytest
 from host_tools.errors import ForaNavError
 from host_tools.flight import harness
 from host_tools.maps import load_map, map_to_dict
-from crazyflie_app.navigation import NavigationApp
-from crazyflie_app.uart2_link import Uart2Link
+from crazyflie_app.app.navigation import NavigationApp
+from crazyflie_app.app.uart2_link import Uart2Link
 
 
 def test_that_fly_pickles_by_reference_and_flies_plain_data():

@@ -1,7 +1,7 @@
 """The oracle camera and the flight statistics."""
 import pytest
 
-from crazyflie_app.navigation_core import NavigationCore, NavigationParams, Pose
+from crazyflie_app.app.navigation_core import NavigationCore, NavigationParams, Pose
 from host_tools.flight.oracle import OracleCamera
 from host_tools.flight.stats import mean_ci95, t_quantile_975
 from host_tools.maps import load_map

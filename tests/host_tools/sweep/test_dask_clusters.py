@@ -15,7 +15,7 @@ import pytest
 
 from host_tools.sweep.runner import fly_task
 from host_tools.sweep.specs import flight_spec
-from host_tools.plantation import PlantationRanges
+from host_tools.plantation_ranges import PlantationRanges
 from tests.conftest import REPO_ROOT
 
 ROOT = REPO_ROOT

@@ -13,7 +13,7 @@ from host_tools.sweep.runner import fly_task
 from host_tools.sweep.specs import (TUNING_PLANTATION_SEEDS, flight_spec, fly_command, make_specs, plantation_seed,
                                     seed_role)
 from host_tools.sweep.store import SweepStore
-from host_tools.plantation import PlantationRanges
+from host_tools.plantation_ranges import PlantationRanges
 
 SMALL = PlantationRanges(columns=(1, 1), column_length_m=(1.5, 1.8))  # quick oracle flights
 OUTPUT_KEYS = {"map", "tlog", "plot", "summary", "detections_csv", "cpu_s"}  # paths, names and timing

@@ -15,14 +15,10 @@ tools import it too, so a map's target trees and the app's T_d agree).
 """
 import math
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
 
-if TYPE_CHECKING:  # nav_types imports this module (COLUMN_FACTOR)
-    from crazyflie_app.nav_types import NavigationParams, Pose
+from crazyflie_app.app.nav_types import COLUMN_FACTOR, NavigationParams, Pose
 
 Point = tuple[float, float]  # (x, y), m
-
-COLUMN_FACTOR = 1.5  # paper: planting column half-width, in crown sizes
 
 
 def distance_to_segment(px: float, py: float, a: Point, b: Point) -> float:

@@ -54,17 +54,17 @@ import math
 from collections.abc import Iterator, Sequence
 
 from jevois_module.ForaNavTrees import foranav_serial
-from crazyflie_app.app_main import CAMERA_TASK_PERIOD_MS, DEBUG_MODULE, app_init, format_fixed
-from crazyflie_app.app_main import BOOT_DELAY_MS, PRE_TAKEOFF_DELAY_MS  # noqa: F401 (the app's boot timing)
+from crazyflie_app.app.app_main import CAMERA_TASK_PERIOD_MS, DEBUG_MODULE, app_init, format_fixed
+from crazyflie_app.app.app_main import BOOT_DELAY_MS, PRE_TAKEOFF_DELAY_MS  # noqa: F401 (the app's boot timing)
 from crazyflie_app.firmware.commander import setpoint_t
 from crazyflie_app.firmware.freertos import Delay, m2t, v_task_delay
 from crazyflie_app.firmware.logparam import (LOG_FLOAT, LOG_UINT8, LOG_UINT16, LOG_UINT32, PARAM_FLOAT, PARAM_UINT8,
                                               PARAM_UINT16, PARAM_UINT32, log_add, log_group, param_add, param_group)
 from crazyflie_app.firmware.system import Crazyflie
-from crazyflie_app.navigation_core import (PHASE_DONE, PHASE_NO_CAMERA, Detection, NavigationCore,
+from crazyflie_app.app.navigation_core import (PHASE_DONE, PHASE_NO_CAMERA, Detection, NavigationCore,
                                            NavigationParams, Pose)
-from crazyflie_app.serial_link import SerialLink
-from crazyflie_app.uart2_link import Uart2Link
+from crazyflie_app.app.serial_link import SerialLink
+from crazyflie_app.app.uart2_link import Uart2Link
 
 
 class NavigationApp:

@@ -10,8 +10,8 @@ import random
 import pytest
 
 from crazyflie_app.firmware import Crazyflie
-from crazyflie_app.navigation import NavigationApp
-from crazyflie_app.serial_link import SerialLink
+from crazyflie_app.app.navigation import NavigationApp
+from crazyflie_app.app.serial_link import SerialLink
 from jevois_module.ForaNavTrees import foranav_serial as fs
 
 PATH = ((0.3, 0.45), (3.9, 0.45), (3.9, -0.45), (0.3, -0.45))

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from crazyflie_app.pixel_kalman import PixelKalmanFilter
+from crazyflie_app.app.pixel_kalman import PixelKalmanFilter
 
 SEED = 7
 POSITION_TOLERANCE_PX = 1.5

@@ -5,7 +5,7 @@ hold position (zero velocity at the flight height) until frames come back, when 
 was; silent for ``linkLandMs`` it lands (LAND, then DONE with ``link_aborted``). A camera that sends no frame
 marks cannot be told from one that sees nothing, so it is not watched.
 """
-from crazyflie_app.nav_types import Counters, Event, NavigationParams
+from crazyflie_app.app.nav_types import Counters, Event, NavigationParams
 
 HOLD, LAND = "hold", "land"
 

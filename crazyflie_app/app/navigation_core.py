@@ -22,18 +22,18 @@ until the cross-track error is below ``returnTolerance``.
 import math
 from collections.abc import Sequence
 
-from crazyflie_app.camera_geometry import CameraGeometry, PoseHistory, merge_duplicates, rotate, unrotate
-from crazyflie_app.frame_input import FrameInput
-from crazyflie_app.link_watch import HOLD, LinkWatch
-from crazyflie_app.nav_types import (PHASE_APPROACH, PHASE_BOOT, PHASE_DONE, PHASE_FOLLOW_PATH, PHASE_LAND,
+from crazyflie_app.app.camera_geometry import CameraGeometry, PoseHistory, merge_duplicates, rotate, unrotate
+from crazyflie_app.app.frame_input import FrameInput
+from crazyflie_app.app.link_watch import HOLD, LinkWatch
+from crazyflie_app.app.nav_types import (PHASE_APPROACH, PHASE_BOOT, PHASE_DONE, PHASE_FOLLOW_PATH, PHASE_LAND,
                                      PHASE_NAMES, PHASE_NO_CAMERA, PHASE_NO_DECK, PHASE_RECOVERY,
                                      PHASE_RETURN_TO_PATH, PHASE_TAKEOFF, POSE_HISTORY_LENGTH, Command, Counters,
                                      Detection, Event, NavigationParams, Pose)
-from crazyflie_app.path_following import PathFollower, distance_to_segment
-from crazyflie_app.recovery import ABANDON, ABANDON_UNSEEN, Recovery, nearest
-from crazyflie_app.tree_memory import StoredTree, TreeMemory
-from crazyflie_app.vertical import NULL_COMMAND, TakeoffRule, landing_setpoint
-from crazyflie_app.visual_servo import VisualServo, servo_velocity
+from crazyflie_app.app.path_following import PathFollower, distance_to_segment
+from crazyflie_app.app.recovery import ABANDON, ABANDON_UNSEEN, Recovery, nearest
+from crazyflie_app.app.tree_memory import StoredTree, TreeMemory
+from crazyflie_app.app.vertical import NULL_COMMAND, TakeoffRule, landing_setpoint
+from crazyflie_app.app.visual_servo import VisualServo, servo_velocity
 
 __all__ = ["PHASE_APPROACH", "PHASE_BOOT", "PHASE_DONE", "PHASE_FOLLOW_PATH", "PHASE_LAND", "PHASE_NAMES",
            "PHASE_NO_CAMERA", "PHASE_NO_DECK", "PHASE_RECOVERY", "PHASE_RETURN_TO_PATH", "PHASE_TAKEOFF",

@@ -16,9 +16,9 @@ import math
 from collections.abc import Iterable
 from typing import Any
 
-from crazyflie_app.camera_geometry import unrotate
-from crazyflie_app.nav_types import Event, NavigationParams, Pose
-from crazyflie_app.tree_memory import StoredTree, TreeMemory
+from crazyflie_app.app.camera_geometry import unrotate
+from crazyflie_app.app.nav_types import Event, NavigationParams, Pose
+from crazyflie_app.app.tree_memory import StoredTree, TreeMemory
 
 ABANDON, ABANDON_UNSEEN = "abandon", "abandon_unseen"
 

@@ -16,9 +16,9 @@
 """
 import math
 
-from crazyflie_app.camera_geometry import CameraGeometry
-from crazyflie_app.nav_types import NavigationParams, Pose
-from crazyflie_app.pixel_kalman import PixelKalmanFilter
+from crazyflie_app.app.camera_geometry import CameraGeometry
+from crazyflie_app.app.nav_types import NavigationParams, Pose
+from crazyflie_app.app.pixel_kalman import PixelKalmanFilter
 
 
 def servo_velocity(offset_fwd_m: float, offset_left_m: float, gain: float, max_speed: float,

@@ -4,11 +4,11 @@ import math
 import pytest
 
 from crazyflie_app.firmware import COMMANDER_PRIORITY_DISABLE, Crazyflie, MavModelConfig, v_task_delay
-from crazyflie_app.navigation import (BOOT_DELAY_MS, LOG_TABLE, PARAM_TABLE, PRE_TAKEOFF_DELAY_MS, NavigationApp)
-from crazyflie_app.navigation_core import PHASE_FOLLOW_PATH, PHASE_NO_DECK, PHASE_TAKEOFF
+from crazyflie_app.app.navigation import (BOOT_DELAY_MS, LOG_TABLE, PARAM_TABLE, PRE_TAKEOFF_DELAY_MS, NavigationApp)
+from crazyflie_app.app.navigation_core import PHASE_FOLLOW_PATH, PHASE_NO_DECK, PHASE_TAKEOFF
 from jevois_module.ForaNavTrees import foranav_serial as fs
 
-from .conftest import console_text
+from tests.crazyflie_app.conftest import console_text
 
 PATH = ((0.0, 0.0), (3.0, 0.0))
 ALTITUDE_TOLERANCE = 0.05

@@ -1,16 +1,15 @@
 """The navigation core's records: the phases, the pose / command / detection tuples, every parameter
 (``NavigationParams``, exported by the app as PARAMs), the decisions (``Event``) and the counters. Imported
-through ``crazyflie_app.navigation_core`` by everything outside the core."""
+through ``crazyflie_app.app.navigation_core`` by everything outside the core."""
 from dataclasses import dataclass
 from typing import NamedTuple
-
-from crazyflie_app.path_following import COLUMN_FACTOR
 
 PHASE_BOOT, PHASE_TAKEOFF, PHASE_FOLLOW_PATH, PHASE_APPROACH, PHASE_RECOVERY, PHASE_RETURN_TO_PATH, \
     PHASE_LAND, PHASE_DONE, PHASE_NO_DECK, PHASE_NO_CAMERA = range(10)
 PHASE_NAMES = ("BOOT", "TAKEOFF", "FOLLOW_PATH", "APPROACH", "RECOVERY", "RETURN_TO_PATH", "LAND", "DONE",
                "NO_DECK", "NO_CAMERA")
 
+COLUMN_FACTOR = 1.5  # paper: planting column half-width, in crown sizes (path_following.within_column)
 POSE_HISTORY_LENGTH = 128  # ticks of pose history kept for latency compensation (~1.3 s at 100 Hz)
 
 

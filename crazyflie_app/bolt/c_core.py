@@ -20,11 +20,11 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from crazyflie_app.nav_types import focal_px
-from crazyflie_app.navigation_core import Command, Counters, Detection, Event, NavigationParams
+from crazyflie_app.app.nav_types import focal_px
+from crazyflie_app.app.navigation_core import Command, Counters, Detection, Event, NavigationParams
 
-REPO = Path(__file__).resolve().parents[1]
-SOURCE_DIR = Path(__file__).resolve().parent / "bolt" / "src"
+REPO = Path(__file__).resolve().parents[2]
+SOURCE_DIR = Path(__file__).resolve().parent / "src"
 # the core's files are nav_*: all of them, with the host-only nav_host.c (the Bolt's src/Kbuild lists them too)
 SOURCES = tuple(sorted(path.name for path in SOURCE_DIR.glob("nav_*.c")))
 HEADERS = tuple(sorted(path.name for path in SOURCE_DIR.glob("nav_*.h")))

@@ -10,10 +10,10 @@ rule of the current segment.
 """
 from collections.abc import Callable, Sequence
 
-from crazyflie_app.camera_geometry import Point, merge_duplicates
-from crazyflie_app.nav_types import Counters, Detection, Event, NavigationParams
-from crazyflie_app.path_following import PathFollower
-from crazyflie_app.tree_memory import TreeMemory
+from crazyflie_app.app.camera_geometry import Point, merge_duplicates
+from crazyflie_app.app.nav_types import Counters, Detection, Event, NavigationParams
+from crazyflie_app.app.path_following import PathFollower
+from crazyflie_app.app.tree_memory import TreeMemory
 
 
 class FrameInput:

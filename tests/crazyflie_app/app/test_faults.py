@@ -10,18 +10,18 @@ import sys
 import pytest
 
 from crazyflie_app.firmware import COMMANDER_PRIORITY_DISABLE, Crazyflie, v_task_delay
-from crazyflie_app.navigation import BOOT_DELAY_MS, PRE_TAKEOFF_DELAY_MS, NavigationApp
-from crazyflie_app.navigation_core import (PHASE_FOLLOW_PATH, PHASE_LAND, PHASE_NO_CAMERA,
+from crazyflie_app.app.navigation import BOOT_DELAY_MS, PRE_TAKEOFF_DELAY_MS, NavigationApp
+from crazyflie_app.app.navigation_core import (PHASE_FOLLOW_PATH, PHASE_LAND, PHASE_NO_CAMERA,
                                            PHASE_RECOVERY, PHASE_TAKEOFF, Detection, NavigationCore,
                                            NavigationParams, Pose, merge_duplicates)
-from crazyflie_app.tree_memory import TreeMemory
+from crazyflie_app.app.tree_memory import TreeMemory
 from host_tools.errors import ForaNavError
 from host_tools.flight import camera_factory, run_flight
 from host_tools.maps import load_map
 from jevois_module.ForaNavTrees import foranav_serial as fs
 from tests.conftest import FIXTURES
 
-from .conftest import console_text
+from tests.crazyflie_app.conftest import console_text
 
 PATH = ((0.0, 0.0), (3.0, 0.0))
 BOOTED_MS = BOOT_DELAY_MS + 10

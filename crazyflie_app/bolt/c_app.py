@@ -16,12 +16,12 @@ It has the interface the harness uses of ``navigation.NavigationApp`` (``start``
 """
 from collections.abc import Iterator, Sequence
 
-from crazyflie_app.app_main import CAMERA_TASK_PERIOD_MS, DEBUG_MODULE, app_init
-from crazyflie_app.c_core import CFrame, CNavigationCore, CParams, c_params
+from crazyflie_app.app.app_main import CAMERA_TASK_PERIOD_MS, DEBUG_MODULE, app_init
+from crazyflie_app.bolt.c_core import CFrame, CNavigationCore, CParams, c_params
 from crazyflie_app.firmware.commander import setpoint_t
 from crazyflie_app.firmware.freertos import Delay, m2t, v_task_delay
 from crazyflie_app.firmware.system import Crazyflie
-from crazyflie_app.navigation import LOG_TABLE, PARAM_TABLE
+from crazyflie_app.app.navigation import LOG_TABLE, PARAM_TABLE
 
 UART2_BAUDRATE = 115200
 UART_READ_CHUNK = 64  # foranav_app.c: uint8_t buffer[64]

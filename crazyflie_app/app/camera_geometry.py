@@ -10,7 +10,7 @@ import math
 from collections import deque
 from collections.abc import Sequence
 
-from crazyflie_app.nav_types import POSE_HISTORY_LENGTH, Detection, NavigationParams, Pose
+from crazyflie_app.app.nav_types import POSE_HISTORY_LENGTH, Detection, NavigationParams, Pose
 
 Point = tuple[float, float]  # (x, y) m or (u, v) px
 MIN_HEIGHT_M = 0.05  # the ground scale uses at least this height (never zero on the ground)

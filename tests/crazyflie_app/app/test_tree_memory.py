@@ -1,7 +1,7 @@
 """T_d and the visited list: merging, per-frame exclusivity, visited association, bounded capacities."""
 import pytest
 
-from crazyflie_app.tree_memory import TreeMemory
+from crazyflie_app.app.tree_memory import TreeMemory
 
 MERGE_RADIUS = 0.45
 MAV = (0.0, 0.0)

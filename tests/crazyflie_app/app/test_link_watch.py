@@ -1,7 +1,7 @@
 """The app's behaviour with a real camera in the loop (pure core): hold position when the camera goes silent
 in flight, resume when frames come back, land when it stays silent, never judge a camera that sends no frame
 marks; and give a target up after app.targetTimeout so a flickering detection cannot stall the mission."""
-from crazyflie_app.navigation_core import (PHASE_FOLLOW_PATH, PHASE_LAND, PHASE_RETURN_TO_PATH, Detection,
+from crazyflie_app.app.navigation_core import (PHASE_FOLLOW_PATH, PHASE_LAND, PHASE_RETURN_TO_PATH, Detection,
                                            NavigationCore, NavigationParams, Pose)
 
 PATH = [(0.0, 0.0), (5.0, 0.0)]

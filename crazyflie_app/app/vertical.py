@@ -6,7 +6,7 @@ then the motors stop (null setpoints).
 Navigation.c held ``landFinal`` (0.15 m) and cut the motors there: on the firmware plant that drop hits the
 ground at 1.7 m/s, which the crash rule (and a Bolt's landing gear) does not forgive; the ramp touches down
 at the descent's speed (docs/flight-app.md)."""
-from crazyflie_app.nav_types import Command, NavigationParams, Pose
+from crazyflie_app.app.nav_types import Command, NavigationParams, Pose
 
 NULL_COMMAND = Command("null", 0.0, 0.0, 0.0)
 

@@ -1,7 +1,7 @@
 """The camera serial link: non-blocking reads, partial and overlong lines, reopening a vanished port."""
 import serial
 
-from crazyflie_app.serial_link import REOPEN_BACKOFF_MS, SerialLink
+from crazyflie_app.app.serial_link import REOPEN_BACKOFF_MS, SerialLink
 from host_tools.flight.wire import PtyWire
 
 

@@ -7,8 +7,8 @@ import math
 
 import pytest
 
-from crazyflie_app import navigation_core as nc
-from crazyflie_app.navigation_core import Detection, NavigationCore, NavigationParams, Pose, servo_velocity
+from crazyflie_app.app import navigation_core as nc
+from crazyflie_app.app.navigation_core import Detection, NavigationCore, NavigationParams, Pose, servo_velocity
 
 ALTITUDE = 1.25
 TICK_MS = 10

@@ -1,0 +1,35 @@
+"""No import circles among the project's Python modules, and no call circles among the C core's files: each
+layer calls only the layers below it (DESIGN.md), so a reader can read any file knowing only what is under it.
+The picture of docs/DESIGN.md names only functions that exist."""
+from host_tools import architecture
+
+
+def test_that_the_circle_finder_finds_a_circle():
+    assert architecture.circles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
+    assert architecture.circles({"a": {"b"}, "b": set()}) == []
+
+
+def test_that_no_python_module_imports_itself_round_a_circle():
+    graph = architecture.python_imports()
+    assert "crazyflie_app.app.nav_types" in graph["crazyflie_app.app.path_following"], "the import graph is read"
+    assert architecture.circles(graph) == []
+
+
+def test_that_no_c_core_file_calls_back_into_a_file_that_calls_it():
+    graph = architecture.c_calls()
+    assert "nav_state.c" in graph["nav_core.c"], "the call graph is read"
+    assert architecture.circles(graph) == []
+
+
+def test_that_the_camera_module_and_the_app_import_nothing_of_the_host():
+    rooms = architecture.room_imports()
+    assert rooms["jevois_module.ForaNavTrees"] == []
+    assert not [room for room in rooms["crazyflie_app.app"] + rooms["crazyflie_app.firmware"]
+                if room.startswith("host_tools")]
+
+
+def test_that_every_step_of_the_picture_names_a_function_that_is_there():
+    assert architecture.missing_steps() == []
+    moved = (architecture.Step("camera", "x", "jevois_module/ForaNavTrees/foranav_detector.py:TreeDetector.gone"),
+             architecture.Step("app", "x", "navNoSuchFunction"))
+    assert architecture.missing_steps(moved) == [step.done_by for step in moved]
