@@ -13,7 +13,8 @@ Results go to DIR/sweep.sqlite as flights finish: the same command again skips t
 larger --count extends the sweep), a killed sweep loses only the flights in flight, and a flight that
 raises is stored with its traceback. Then DIR/report.md, deviations.png and rates.png are written (the
 flawless rate with a 95 % Wilson interval, failure taxonomy, deviations, rates by factor, the worst flights
-each with the foranav fly command that replays it); --json prints the report as JSON.
+each with the foranav fly command that replays it, then every failed flight with its plantation and fly
+commands); --json prints the report as JSON.
 
 Exit status 0 when every flight ran (flawless or not), 1 when some raised, 2 on bad input.
 

@@ -1,5 +1,6 @@
 """The sweep report: flawless rate with a 95 % Wilson interval, failure taxonomy, deviation distribution,
-rates by factor and the worst flights with the fly command that replays each.
+rates by factor, the worst flights with the fly command that replays each, and every failed flight with the
+plantation and fly commands that replay it.
 
     build_report(rows, out_dir) -> report dict;  write_report(report, rows, out_dir) -> report.md + PNGs
 
@@ -206,7 +207,16 @@ def build_report(rows: Sequence[dict], out_dir: str | os.PathLike, identity: dic
         "cpu_s_per_flight": round(sum(cpu) / len(cpu), 2) if cpu else None,
         "rates_by_factor": rates_by_factor(rows),
         "worst": worst_rows,
+        "failed": [_failed_row(row, out_dir, ranges) for row in rows if not flawless(row)],
     }
+
+
+def _failed_row(row: dict, out_dir: Path, ranges: PlantationRanges | None) -> dict:
+    """A failed flight, with the two commands that replay it (the plantation command writes its map)."""
+    map_path = out_dir / "maps" / ("flight-%05d.json" % row["index"])
+    return {"index": row["index"], "failures": failure_classes(row), "conditions": row["spec"]["conditions"],
+            "plantation": plantation_command(row["spec"], map_path, ranges),
+            "fly": fly_command(row["spec"], map_path)}
 
 
 def write_report(report: dict, rows: Sequence[dict], out_dir: str | os.PathLike) -> None:
@@ -282,6 +292,15 @@ def markdown(report: dict) -> str:
         out += ["- flight %d (%s%s; max deviation %s m, altitude %.2f m)" % (
             w["index"], what, "; " + "; ".join(detail) if detail else "", _num(w["max_deviation_m"]),
             w["altitude_m"]), "", "      %s" % w["fly"], "      %s" % w["plantation"], ""]
+    if report["failed"]:
+        out += ["## Every failed flight", "", "By index; the plantation command writes the map the fly command "
+                "replays.", ""]
+        for f in report["failed"]:
+            conditions = ", ".join("%s %s" % (k, v) for k, v in sorted(f["conditions"].items())
+                                   if k in ("estimator", "wind_mps2"))
+            out += ["- flight %d (%s%s)" % (f["index"], ", ".join(f["failures"]) or "raised",
+                                           "; " + conditions if conditions else ""),
+                    "", "      %s" % f["plantation"], "      %s" % f["fly"], ""]
     return "\n".join(out) + "\n"
 
 

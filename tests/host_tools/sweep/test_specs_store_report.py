@@ -8,7 +8,7 @@ import pytest
 from host_tools import fileio
 from host_tools.errors import ForaNavError
 from host_tools.sweep import conditions as cond
-from host_tools.sweep.report import build_report, failure_classes, wilson
+from host_tools.sweep.report import build_report, failure_classes, markdown, wilson
 from host_tools.sweep.runner import fly_task
 from host_tools.sweep.specs import (TUNING_PLANTATION_SEEDS, flight_spec, fly_command, make_specs, plantation_seed,
                                     seed_role)
@@ -109,6 +109,26 @@ def test_that_a_flight_that_raises_is_recorded_with_its_traceback_and_reported_a
     assert report["failures"]["crash"] == 1 and report["flights"] == 2
     assert report["flawless"] == (1 if rows[0]["summary"]["success"] else 0)
     assert failure_classes(rows[1]) == ["crash"]
+
+
+def test_that_the_report_lists_every_failed_flight_with_its_replay_commands(tmp_path):
+    # Fixture: one flown flight stored twelve times, every other copy failed (a target missed)
+    spec = flight_spec(2, 0, camera="oracle", ranges=SMALL)
+    flown = fly_task(spec)
+    assert flown["status"] == "ok" and flown["summary"]["success"]
+    rows = [dict(flown, index=i, spec=dict(spec, seed=100 + i), traceback=None,
+                 summary=dict(flown["summary"], missed_targets=[3] if i % 2 else [], success=not i % 2))
+            for i in range(12)]
+    # Test
+    report = build_report(rows, tmp_path)
+    text = markdown(report)
+    # Assert: all six failures (more than the ten worst would show of a larger sweep), each replayable
+    assert [f["index"] for f in report["failed"]] == [1, 3, 5, 7, 9, 11]
+    section = text[text.index("## Every failed flight"):]
+    for failed in report["failed"]:
+        assert "- flight %d (missed target" % failed["index"] in section
+        assert failed["fly"] in section and "--seed %d" % (100 + failed["index"]) in failed["fly"]
+        assert failed["plantation"] in section
 
 
 def test_that_the_store_refuses_another_sweep_in_the_same_folder(tmp_path):
