@@ -33,7 +33,7 @@ COMMANDS = {
     "replay": ("host_tools.flight.cmd_replay", "replay a recorded clip through both halves"),
     "plantation": ("host_tools.cmd_plantation", "write a random plantation map (columns, gaps, look-alikes, ...)"),
     "sweep": ("host_tools.sweep.cmd_sweep", "fly thousands of random plantations on Dask; store, report"),
-    "bench": ("host_tools.cmd_bench", "benchmarks that print figures: foranav bench {sim,detector,flight,sweep,recall}"),
+    "bench": ("host_tools.cmd_bench", "benchmarks that print figures: foranav bench {sim,detector,flight,sweep,recall,crtp}"),
     "deploy": ("host_tools.deploy.cmd_deploy", "install the camera module on a JeVois microSD card"),
     "package": ("host_tools.deploy.cmd_package", "build a .jvpkg package of the camera module"),
     "serial-check": ("host_tools.deploy.serial_check", "listen to the camera's serial output and check it"),
