@@ -51,12 +51,7 @@ class Box:
 def read_boxes(csv_path: str | os.PathLike) -> list[Box]:
     """Read a boxes CSV; raises ForaNavError naming the file and line on bad input (module docstring)."""
     csv_path = Path(csv_path)
-    text = fileio.read_text(csv_path, "boxes CSV")
-    refuse_nul_bytes(text, csv_path)
-    try:
-        rows = list(csv.reader(io.StringIO(text)))
-    except csv.Error as err:  # e.g. a field over csv.field_size_limit() (128 KiB)
-        raise ForaNavError("%s: not a valid CSV: %s" % (csv_path, err))
+    rows = read_csv_rows(csv_path, "boxes CSV")
     if not rows:
         raise ForaNavError("%s: empty CSV (expected header %s)" % (csv_path, ",".join(HEADER)))
     if tuple(h.strip() for h in rows[0]) != HEADER:
@@ -75,6 +70,17 @@ def read_boxes(csv_path: str | os.PathLike) -> list[Box]:
     if not boxes:
         raise ForaNavError("%s: no rows" % csv_path)
     return boxes
+
+
+def read_csv_rows(csv_path: str | os.PathLike, what: str) -> list[list[str]]:
+    """The rows of a CSV file; ForaNavError naming the file (``what`` it should be) when it is missing,
+    unreadable, holds NUL bytes or is not CSV."""
+    text = fileio.read_text(csv_path, what)
+    refuse_nul_bytes(text, csv_path)
+    try:
+        return list(csv.reader(io.StringIO(text)))
+    except csv.Error as err:  # e.g. a field over csv.field_size_limit() (128 KiB)
+        raise ForaNavError("%s: not a valid CSV: %s" % (csv_path, err))
 
 
 def refuse_nul_bytes(text: str, csv_path: str | os.PathLike) -> None:

@@ -13,7 +13,6 @@ on both sides.
 """
 import argparse
 import csv
-import io
 import os
 from collections.abc import Sequence
 from pathlib import Path, PurePosixPath
@@ -62,7 +61,7 @@ def read_tiles(csv_path: Path) -> dict[str, tuple[str, int, int, int, int]]:
     path = csv_path.parent / TILES_CSV
     if not path.is_file():
         return {}
-    rows = list(csv.reader(io.StringIO(fileio.read_text(path, "tiles CSV"))))
+    rows = annotations.read_csv_rows(path, "tiles CSV")
     if not rows or tuple(h.strip() for h in rows[0]) != TILES_HEADER:
         raise ForaNavError("%s: header must be %s" % (path, ",".join(TILES_HEADER)))
     tiles = {}

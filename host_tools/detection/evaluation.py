@@ -11,9 +11,7 @@ Frame level: the detector on whole frames; a detection is a hit when its centre 
 matched complete ground-truth box of the species (detections best first); precision, recall, F1, and the
 centre error of the hits in pixels (what the flight app servos on).
 """
-import csv
 import functools
-import io
 import math
 import os
 from collections.abc import Sequence
@@ -23,7 +21,7 @@ import cv2
 import numpy as np
 
 from host_tools import fileio
-from host_tools.annotations import Box, refuse_nul_bytes
+from host_tools.annotations import Box, read_csv_rows
 from host_tools.detection import dataset
 from host_tools.errors import ForaNavError
 
@@ -137,12 +135,7 @@ def is_crops_csv(path: str | os.PathLike) -> bool:
 def read_crops(csv_path: str | os.PathLike) -> list[tuple[str, bool, str]]:
     """[(image path, is positive, category)] of a crops CSV."""
     csv_path = Path(csv_path)
-    text = fileio.read_text(csv_path, "crops CSV")
-    refuse_nul_bytes(text, csv_path)
-    try:
-        rows = list(csv.reader(io.StringIO(text)))
-    except csv.Error as err:  # e.g. a field over csv.field_size_limit() (128 KiB)
-        raise ForaNavError("%s: not a valid CSV: %s" % (csv_path, err))
+    rows = read_csv_rows(csv_path, "crops CSV")
     crops, first_line = [], {}
     for line_no, row in enumerate(rows[1:], start=2):
         if not row:
