@@ -21,11 +21,11 @@ def test_that_no_c_core_file_calls_back_into_a_file_that_calls_it():
     assert architecture.circles(graph) == []
 
 
-def test_that_the_camera_module_and_the_app_import_nothing_of_the_host():
+def test_that_the_camera_module_and_the_firmware_emulation_import_no_other_room():
+    # (the app's own rule, only the serial grammar of the camera: test_app_on_firmware.py)
     rooms = architecture.room_imports()
     assert rooms["jevois_module.ForaNavTrees"] == []
-    assert not [room for room in rooms["crazyflie_app.app"] + rooms["crazyflie_app.firmware"]
-                if room.startswith("host_tools")]
+    assert rooms["crazyflie_app.firmware"] == []
 
 
 def test_that_every_step_of_the_picture_names_a_function_that_is_there():
