@@ -19,6 +19,7 @@ import argparse
 import importlib
 
 from host_tools import argtypes
+from host_tools.errors import ForaNavError
 from crazyflie_app.firmware.system import PLANTS
 from host_tools.sim.cli_args import add_appearance_arguments
 
@@ -41,11 +42,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--count", type=argtypes.int_range(1, 100000), default=None,
                         help="sweep: flights per worker count (default 6); recall: frames per case (default 150)")
     parser.add_argument("--model", default=None,
-                        help="recall: model file, or a shipped species (default: the shipped oil palm model)")
+                        help="detector, recall: model file, or a shipped species (default: the shipped oil palm model)")
     add_appearance_arguments(parser)  # bench sim and recall: --crowns / --ground
     parser.add_argument("--plant", choices=PLANTS, default=None,
                         help="flight: also fly the firmware plant (beside the reduced plant)")
 
 
+MODEL_TARGETS = ("detector", "recall")  # the targets that run a model of the user's choice
+
+
 def run(args: argparse.Namespace) -> int:
+    if args.model is not None and args.target not in MODEL_TARGETS:
+        raise ForaNavError("--model: only with bench %s (bench %s runs no detector model of yours)"
+                           % (" or ".join(MODEL_TARGETS), args.target))
     return importlib.import_module(TARGETS[args.target]).run(args)

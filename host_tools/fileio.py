@@ -17,6 +17,9 @@ from typing import Any
 from host_tools.errors import ForaNavError
 
 MAX_TEXT_BYTES = 256 * 1024 * 1024  # a map, CSV or clip sidecar larger than this is not one of ours
+NAME_MAX = 255  # bytes of one file or folder name (Linux filesystems; FAT's long names too)
+TEMP_STEM_CHARS = 40  # of the target's name kept in its temporary file's name (so that any name fits)
+FIGURE_SUFFIXES = (".png", ".pdf", ".svg")  # what the figure writers (matplotlib) are asked to write
 
 
 def _umask() -> int:
@@ -33,7 +36,8 @@ def atomic_path(path: str | os.PathLike) -> Iterator[Path]:
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix="." + path.stem + ".", suffix=path.suffix + ".tmp" + path.suffix,
+    suffix = path.suffix if len(path.suffix) <= 16 else ""  # writers choose the format by the suffix
+    fd, tmp = tempfile.mkstemp(prefix="." + path.stem[:TEMP_STEM_CHARS] + ".", suffix=".tmp" + suffix,
                                dir=path.parent)
     os.close(fd)
     try:
@@ -93,6 +97,7 @@ def check_output_file(path: str | os.PathLike, option: str = "--out") -> Path:
     path = Path(path)
     if str(path) == "" or path.name in ("", ".", ".."):
         raise ForaNavError("%s %s: not a file name" % (option, path))
+    _check_name_lengths(option, path)
     if path.is_dir():
         raise ForaNavError("%s %s: is a folder, expected a file" % (option, path))
     parent = path.parent
@@ -111,6 +116,7 @@ def check_output_dir(path: str | os.PathLike, option: str = "--out") -> Path:
     path = Path(path)
     if str(path) == "":
         raise ForaNavError("%s: empty folder name" % option)
+    _check_name_lengths(option, path)
     if path.exists() and not path.is_dir():
         raise ForaNavError("%s %s: is a file, expected a folder" % (option, path))
     existing = _nearest_existing(path)
@@ -118,6 +124,29 @@ def check_output_dir(path: str | os.PathLike, option: str = "--out") -> Path:
         raise ForaNavError("%s %s: %s is a file, not a folder" % (option, path, existing))
     _check_writable(option, path, existing)
     return path
+
+
+def check_figure_file(path: str | os.PathLike, option: str) -> Path:
+    """check_output_file for a figure: also a suffix the figure writer knows (it picks the format by it)."""
+    path = check_output_file(path, option)
+    if path.suffix.lower() not in FIGURE_SUFFIXES:
+        raise ForaNavError("%s %s: a figure is written as %s, not %r" % (option, path, "/".join(FIGURE_SUFFIXES),
+                                                                        path.suffix or "(no suffix)"))
+    return path
+
+
+def short_name(path: str | os.PathLike, chars: int = 60) -> str:
+    """A path for a one-line message: at most `chars` characters (its start and end)."""
+    text = str(path)
+    return text if len(text) <= chars else text[:chars // 2 - 2] + "..." + text[-(chars // 2 - 1):]
+
+
+def _check_name_lengths(option: str, path: Path) -> None:
+    for part in path.parts:
+        size = len(os.fsencode(part))
+        if size > NAME_MAX:
+            raise ForaNavError("%s %s: a name of %d bytes; file and folder names are at most %d"
+                               % (option, short_name(path), size, NAME_MAX))
 
 
 def _check_writable(option: str, path: Path, folder: Path) -> None:

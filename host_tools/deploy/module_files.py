@@ -20,6 +20,9 @@ from host_tools.deploy import module_cfg
 from host_tools.deploy.modes import CameraMode, serial_lines_per_frame
 from host_tools.deploy.module_probe import probe_module
 from host_tools.errors import ForaNavError
+import host_tools.detection  # noqa: F401  (puts the camera module folder on sys.path)
+
+import foranav_model
 
 MODULE_NAME = "ForaNavTrees"
 DEFAULT_VENDOR = "ForaNav"
@@ -30,6 +33,7 @@ DEPLOYED_SUFFIXES = (".py", ".npz", ".npy", ".yaml", ".yml", ".xml", ".json", ".
 HOST_ONLY_NAMES = ("__init__.py", "conftest.py")
 HOST_ONLY_PATTERNS = (re.compile(r"^test_.*\.py$"), re.compile(r"^.*_test\.py$"))
 GENERATED_NAMES = ("script.cfg", "params.cfg")
+MODEL_LOADER = "foranav_model.py"  # the detector's model reader: a folder with it holds ForaNav models
 MODEL_NAME_RE = re.compile(r"^foranav_\w+\.npz$")
 NAME_RE = re.compile(r"^[A-Z][A-Za-z0-9_]*$")  # JeVois Inventor wants an uppercase first letter
 
@@ -40,7 +44,13 @@ class ModulePayload:
     notes: list  # lines for the user
 
 
+MAX_NAME_CHARS = 64  # a vendor or module name: a folder on the card, in videomappings.cfg lines and paths
+
+
 def check_name(kind: str, name: str) -> str:
+    if len(name or "") > MAX_NAME_CHARS:
+        raise ForaNavError("--%s: a name of %d characters; at most %d (a folder name on the card)"
+                           % (kind, len(name), MAX_NAME_CHARS))
     if not NAME_RE.match(name or ""):
         raise ForaNavError("%s %r: must start with an uppercase letter and use only letters, digits and _ "
                            "(JeVois Inventor's rule; it is also a folder name on the card)" % (kind, name))
@@ -89,10 +99,15 @@ def _defines_class(tree, class_name):
     return any(isinstance(node, ast.ClassDef) and node.name == class_name for node in tree.body)
 
 
-def _check_model_file(name, data):
+def _check_model_file(name, data, files):
     # A .npz is a zip archive; a Git LFS pointer or a truncated copy is not, and would only fail on the camera.
     if not zipfile.is_zipfile(io.BytesIO(data)):
         raise ForaNavError("model file %s: not a .npz archive (a Git LFS pointer or a damaged copy?)" % name)
+    if MODEL_LOADER in files:  # a ForaNav detector module: its models are checked whole (network, windows)
+        try:
+            foranav_model.load_model(io.BytesIO(data), name="model file %s" % name)
+        except foranav_model.ModelFormatError as err:
+            raise ForaNavError(str(err))
 
 
 def validate_module(files: dict[str, bytes], module_name: str = MODULE_NAME,
@@ -115,7 +130,7 @@ def validate_module(files: dict[str, bytes], module_name: str = MODULE_NAME,
                            % default_model)
     for name in sorted(files):
         if name.endswith(".npz"):
-            _check_model_file(name, files[name])
+            _check_model_file(name, files[name], files)
     named = {text for tree in trees.values() for text in _string_constants(tree) if MODEL_NAME_RE.match(text)}
     notes = ["model file %s is named in the code but not in the module folder: that species cannot be selected "
              "on the camera" % name for name in sorted(named - set(files))]

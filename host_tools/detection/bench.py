@@ -116,7 +116,7 @@ def _measure(seed, model_name, sizes, fast_frames, reference_frames, pinned):
 
 
 def run(args: argparse.Namespace) -> int:
-    result = measure(seed=args.seed)
+    result = measure(seed=args.seed, model_name=getattr(args, "model", None) or "oil_palm")
     if getattr(args, "json", False):
         print(json.dumps(result))
         return 0

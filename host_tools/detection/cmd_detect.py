@@ -14,6 +14,7 @@ import json
 import math
 import sys
 
+from host_tools import argtypes
 from host_tools.detection import common, dataset
 from host_tools.threads import single_threaded
 from host_tools.errors import ForaNavError
@@ -35,36 +36,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--crown-m", type=float, metavar="M", help="typical crown diameter, metres (with --gsd)")
     parser.add_argument("--window", type=float, action="append", metavar="PX",
                         help="window side in pixels (repeat for several; default: from the crown size)")
-    parser.add_argument("--max-detections", type=int, metavar="N", help="report at most N trees per image, best "
+    parser.add_argument("--max-detections", type=argtypes.int_range(*common.MAX_DETECTIONS_RANGE), metavar="N", help="report at most N trees per image, best "
                         "first (default: all)")
     parser.add_argument("--domain", metavar="NAME", help="the model's imagery to use (default: the nearest in colour)")
-    parser.add_argument("--step", type=int, default=detector_core.DEFAULT_STEP,
+    parser.add_argument("--step", type=argtypes.int_range(*common.STEP_RANGE), default=detector_core.DEFAULT_STEP,
                         help="window step in downscaled pixels, 1..24 (default %d = W/12; paper: 8 = W/3)"
                         % detector_core.DEFAULT_STEP)
     parser.add_argument("--json", action="store_true", help="one JSON object per image")
-
-
-MIN_CROWN_PX = 8  # a crown smaller than this in the image is no tree the windows can frame
-
-
-def crown_pixels(args: argparse.Namespace) -> float | str | None:
-    """The crown diameter in pixels from --crown-px or --gsd/--crown-m (None when no scale is given)."""
-    if (args.gsd is None) != (args.crown_m is None):
-        raise ForaNavError("--gsd and --crown-m go together (crown pixels = crown metres / metres per pixel)")
-    if args.crown_px is not None and args.gsd is not None:
-        raise ForaNavError("give --crown-px or --gsd with --crown-m, not both")
-    if args.gsd is not None:
-        for name, value in (("--gsd", args.gsd), ("--crown-m", args.crown_m)):
-            if not (math.isfinite(value) and value > 0):
-                raise ForaNavError("%s must be a positive number" % name)
-        crown_px = args.crown_m / args.gsd
-        if not crown_px >= MIN_CROWN_PX:
-            raise ForaNavError("--gsd %g --crown-m %g: a crown of %.3g px; at least %d pixels"
-                               % (args.gsd, args.crown_m, crown_px, MIN_CROWN_PX))
-        return crown_px
-    if args.crown_px is not None and not (math.isfinite(args.crown_px) and args.crown_px >= MIN_CROWN_PX):
-        raise ForaNavError("--crown-px must be a number of at least %d pixels" % MIN_CROWN_PX)
-    return args.crown_px
 
 
 def settings_for(args: argparse.Namespace, model: foranav_model.TreeModel, crown_px: float | None) -> dict:
@@ -90,10 +68,11 @@ def settings_for(args: argparse.Namespace, model: foranav_model.TreeModel, crown
 def run(args: argparse.Namespace) -> int:
     single_threaded()
     model = common.load(args.model)
-    crown_px = crown_pixels(args)
+    crown_px = common.crown_pixels(args)
     settings = settings_for(args, model, crown_px)
     detector = detector_core.TreeDetector(model, settings)
     images = [(path, dataset.read_image(path)) for path in args.images]  # all readable before any output
+    common.check_crown_fits(crown_px, [bgr.shape[1::-1] for _path, bgr in images], "the images")
     warned = set()
     for path, bgr in images:
         height, width = bgr.shape[:2]

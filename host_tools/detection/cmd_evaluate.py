@@ -13,11 +13,9 @@ Crop level: the paper's protocol on crops CSVs (image,class,category; written by
 """
 import argparse
 import json
-import math
 
-from host_tools import fileio
+from host_tools import argtypes, fileio
 from host_tools.detection import common, dataset, evaluation
-from host_tools.detection.cmd_detect import MIN_CROWN_PX
 from host_tools.threads import single_threaded
 from host_tools.errors import ForaNavError
 from host_tools.plotting import plt
@@ -26,6 +24,9 @@ import foranav_detector as detector_core
 import foranav_model
 
 PAPER = {"accuracy": 0.9291, "precision": 0.9037, "recall": 0.9606}
+
+
+MAX_CROPS = 10000  # crops of each class: 48x48 HSV windows, 70 MB at this count
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -39,41 +40,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--gsd", type=float, metavar="M_PER_PX", help="metres per pixel (with --crown-m)")
     parser.add_argument("--crown-m", type=float, metavar="M", help="typical crown diameter, metres (with --gsd)")
     parser.add_argument("--hull", action="store_true", help="score only inside each image's annotated area")
-    parser.add_argument("--max-detections", type=int, metavar="N", help="at most N trees per frame (default: all)")
-    parser.add_argument("--crops", type=int, default=120, help="crops of each class cut from frames (default 120)")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the crops cut from frames (default 0)")
+    parser.add_argument("--max-detections", type=argtypes.int_range(*common.MAX_DETECTIONS_RANGE), metavar="N", help="at most N trees per frame (default: all)")
+    parser.add_argument("--crops", type=argtypes.int_range(1, MAX_CROPS), default=120, help="crops of each class cut from frames (default 120)")
+    parser.add_argument("--seed", type=argtypes.seed, default=0, help="seed of the crops cut from frames (default 0)")
     parser.add_argument("--plot", metavar="PNG", help="write the precision-recall curve of each imagery here")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
 
 
-def crown_scale(args: argparse.Namespace) -> float | None:
-    if (args.gsd is None) != (args.crown_m is None):
-        raise ForaNavError("--gsd and --crown-m go together")
-    if args.gsd is not None:
-        if args.crown_px is not None:
-            raise ForaNavError("give --crown-px or --gsd with --crown-m, not both")
-        if not (math.isfinite(args.gsd) and args.gsd > 0 and math.isfinite(args.crown_m) and args.crown_m > 0):
-            raise ForaNavError("--gsd and --crown-m must be positive numbers")
-        crown_px = args.crown_m / args.gsd
-        if not crown_px >= MIN_CROWN_PX:
-            raise ForaNavError("--gsd %g --crown-m %g: a crown of %.3g px; at least %d pixels"
-                               % (args.gsd, args.crown_m, crown_px, MIN_CROWN_PX))
-        return crown_px
-    if args.crown_px is None or args.crown_px == "boxes":
-        return args.crown_px
-    try:
-        value = float(args.crown_px)
-    except ValueError:
-        raise ForaNavError("--crown-px must be a number of pixels or 'boxes'")
-    if not (math.isfinite(value) and value >= MIN_CROWN_PX):
-        raise ForaNavError("--crown-px must be at least %d pixels" % MIN_CROWN_PX)
-    return value
-
-
 def run(args: argparse.Namespace) -> int:
+    if args.plot is not None:
+        fileio.check_figure_file(args.plot, "--plot")
     single_threaded()
     model = common.load(args.model)
-    crown_px = crown_scale(args)
+    crown_px = common.crown_pixels(args, boxes=True)
     if args.max_detections is not None and args.max_detections < 1:
         raise ForaNavError("--max-detections must be at least 1")
     if args.crops < 1 or args.seed < 0:
@@ -95,6 +74,7 @@ def run(args: argparse.Namespace) -> int:
     frame_csvs = [p for p in paths if p not in crop_csvs]
     imageries = [(path, dataset.load_frames([path])) for path in frame_csvs]
     frames = [f for _path, fs in imageries for f in fs]
+    common.check_crown_fits(crown_px, [f.bgr.shape[1::-1] for f in frames], "the frames of --data")
     if crop_csvs:
         crops = [c for path in crop_csvs for c in evaluation.read_crops(path)]
         result = evaluation.evaluate_crop_images(model, crops)

@@ -28,9 +28,8 @@ import foranav_features as features
 import foranav_model
 
 
-REFERENCE_WIDTH_RANGE = (64, 2048)  # px: the flight camera's frame width (JeVois-A33 modes are 88..1280 px wide)
-MARGIN_RANGE = (0.5, 4.0)  # training window side / crown size
-FRAME_HEIGHT_PER_WIDTH = 0.75  # the narrowest JeVois sensor mode (4:3)
+REFERENCE_WIDTH_RANGE = foranav_model.REFERENCE_WIDTHS  # px: the flight camera's frame width
+MARGIN_RANGE = (0.5, foranav_model.MAX_WINDOW_RATIO)  # training window side / crown size
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -115,15 +114,24 @@ def _windows(text: str, reference_width: int) -> tuple[int, ...]:
         windows = tuple(int(w) for w in text.split(","))
     except ValueError:
         raise ForaNavError("--windows must be comma-separated integers, got %r" % text)
-    largest = int(reference_width * FRAME_HEIGHT_PER_WIDTH)
+    largest = foranav_model.largest_window(reference_width)
     if min(windows) < features.HOG_WINDOW or max(windows) > largest:
         raise ForaNavError("--windows: each side must be %d..%d px (the frame's shorter side at --reference-width "
                            "%d), got %s" % (features.HOG_WINDOW, largest, reference_width, text))
     return windows
 
 
+def report_folder(args: argparse.Namespace) -> str | None:
+    """--report: the report's folder (default: the model's name without .npz + '_report'); None for 'none'."""
+    report_dir = args.report or str(Path(args.out).with_suffix("")) + "_report"
+    return None if report_dir == "none" else report_dir
+
+
 def run(args: argparse.Namespace) -> int:
     fileio.check_output_file(args.out)  # before the training run, not after it
+    report_dir = report_folder(args)
+    if report_dir is not None:  # checked before the model is replaced: a bad --report must not cost the model
+        fileio.check_output_dir(report_dir, "--report")
     single_threaded()
     windows = _windows(args.windows, args.reference_width)
     if not 1 <= args.colour_templates <= 16:
@@ -155,8 +163,7 @@ def run(args: argparse.Namespace) -> int:
     with fileio.atomic_path(args.out) as tmp:
         with open(str(tmp), "wb") as handle:
             foranav_model.save_model(model, handle)
-    report_dir = args.report or str(Path(args.out).with_suffix("")) + "_report"
-    if report_dir != "none":
+    if report_dir is not None:
         written = report.write_report(model, imageries, report_dir, seed=args.seed)
         for warning in written["warnings"]:
             print("train: warning: " + warning)

@@ -21,7 +21,8 @@ arming (docs/crtp.md). Lockstep without a client: the same summary and tlog byte
 Prints the flight summary (a short table, or the JSON object with --json) and writes flight.tlog (MAVLink 2),
 trajectory.png and summary.json into --out (default runs/fly-<map>-seed<N>/). Exit status 0 when the flight
 completed, 1 when it did not (crash (CRASHED: tumbled or hit the ground faster than 1 m/s), watchdog lock, time limit, camera never heard so never took off, camera
-link lost in flight), 2 on bad input.
+link lost in flight, or a camera that reported no tree in a whole flight over a map with targets: it flew blind),
+2 on bad input.
 
 Examples:
   foranav fly --map map1
@@ -179,7 +180,9 @@ def print_table(summary: dict, out: TextIO | None = None) -> None:
                                    "SUCCESS" if summary["success"] else
                                    ("completed" if summary["completed"] else
                                     "NOT STARTED: camera never heard, did not take off"
-                                    if summary.get("camera_never_heard") else "NOT COMPLETED")), file=out)
+                                    if summary.get("camera_never_heard") else
+                                    "NOT COMPLETED: the camera reported no tree in the whole flight"
+                                    if summary.get("camera_blind") else "NOT COMPLETED")), file=out)
     print("  %-6s %-14s %s" % ("tree", "deviation (m)", "t (s)"), file=out)
     for r in summary["reached"]:
         print("  %-6s %-14.3f %.1f" % (r["id"] if r["id"] is not None else "-", r["deviation_m"], r["t_s"]),

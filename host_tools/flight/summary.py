@@ -33,9 +33,11 @@ def summarize(flight: FlightView) -> dict:
     mean, ci95 = mean_ci95(deviations)
     supervisor, app = rig.cf.supervisor, rig.app
     watchdog = [{"t_s": t / 1000.0, "state": s} for t, s in supervisor.watchdog_events]
-    # a landing forced by a dead camera link is safe, but the mission was not completed
+    # a landing forced by a dead camera link is safe, but the mission was not completed; nor is a mission over
+    # targets whose camera reported no tree at all (a model that cannot run, a covered lens): it flew blind
+    blind = bool(targets) and app.core.counters.detections == 0
     completed = (app.phase == PHASE_DONE and supervisor.state != LOCKED and not app.core.link_aborted
-                 and not rig.cf.model.crashed)
+                 and not rig.cf.model.crashed and not blind)
     counts = {i: visits.count(i) for i in targets}
     success = (completed and all(c == 1 for c in counts.values()) and not non_targets
                and None not in visits and not watchdog)
@@ -66,6 +68,7 @@ def summarize(flight: FlightView) -> dict:
         "link_losses": counters.link_losses,
         "link_aborted": app.core.link_aborted,
         "camera_never_heard": app.phase == PHASE_NO_CAMERA,  # did not take off: not completed
+        "camera_blind": blind and app.phase != PHASE_NO_CAMERA,  # flew, but saw no tree: not completed
         "plant": flight.options["plant"],
         "crashed": rig.cf.model.crashed,
         "crash": rig.cf.model.crash_reason,

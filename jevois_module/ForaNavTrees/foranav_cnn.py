@@ -8,6 +8,8 @@
 # (host_tools/detection/cnn.py defines and trains it): it learns what the linear HOG cannot, the crown's
 # centre against its neighbours' fronds and the gaps between crowns.
 # Camera and host alike: Python 3.7, numpy 1.16, OpenCV 4.10 (cv2.dnn.readNetFromONNX of a byte buffer).
+import re
+
 import cv2
 import numpy as np
 
@@ -39,3 +41,19 @@ class CnnStage(object):
         blob = np.stack([cnn_input(w, self.side) for w in hsv_windows])
         self.net.setInput(blob)
         return [float(v) for v in np.asarray(self.net.forward()).reshape(len(hsv_windows), -1)[:, 0]]
+
+
+def network_problem(onnx_bytes, side=CNN_SIDE):
+    """'' when the network loads and gives one finite logit for a window of the model's side, else why not
+    (OpenCV's first line: what its ONNX importer or the forward pass says)."""
+    try:
+        stage = CnnStage(onnx_bytes, side)
+        logits = stage.scores([np.zeros((int(side), int(side), 3), np.uint8)])
+    except (cv2.error, ValueError, IndexError) as err:
+        lines = [line.strip() for line in str(err).splitlines() if line.strip()]
+        text = lines[-1] if lines else type(err).__name__
+        found = re.search(r"error: \([^)]*\) (.*?)(?: in function .*)?$", text)  # OpenCV's: drop file and line
+        return (found.group(1) if found else text)[:200]
+    if len(logits) != 1 or not np.isfinite(logits[0]):
+        return "its output is not one finite logit per window"
+    return ""

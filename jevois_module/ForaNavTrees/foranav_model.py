@@ -74,6 +74,16 @@ NPY_MAGIC = b"\x93NUMPY"
 SECOND_STAGE_KINDS = {"second_window": "iu", "second_weights": "fiu", "second_bias": "fiu", "second_threshold": "fiu"}
 CNN_KINDS = {"cnn_onnx": "u", "cnn_side": "iu", "cnn_threshold": "fiu"}
 CNN_SIDES = (16, 128)  # smallest and largest input side a model may ask for
+# What a model's windows may be, from the frames the camera can deliver: the frame width its window sizes refer
+# to (JeVois-A33 modes are 88..1280 px wide), and the windows no larger than the shorter side of such a frame
+# (the narrowest sensor mode is 4:3: every frame is at least 3/4 as high as it is wide). A window/crown ratio
+# window_margin above MAX_WINDOW_RATIO is no training window (`train --margin` stops there); a crown ratio above
+# MAX_CROWN_RATIO gives, for the smallest crown the detector takes (8 px), a window beyond the largest frame
+# side (1024 px): it never fits.
+REFERENCE_WIDTHS = (64, 2048)
+FRAME_HEIGHT_PER_WIDTH = 0.75
+MAX_WINDOW_RATIO = 4.0
+MAX_CROWN_RATIO = 1024 / 8.0
 
 
 class ModelFormatError(ValueError):
@@ -186,6 +196,14 @@ class TreeModel(object):
                                    % (self.svm_weights.size, length))
         if not self.window_sizes or min(self.window_sizes) < features.HOG_WINDOW:
             raise ModelFormatError("window_sizes must be non-empty and at least %d px" % features.HOG_WINDOW)
+        if not REFERENCE_WIDTHS[0] <= self.reference_width <= REFERENCE_WIDTHS[1]:
+            raise ModelFormatError("reference_width %d px is no camera frame width (%d..%d px)"
+                                   % ((self.reference_width,) + REFERENCE_WIDTHS))
+        if max(self.window_sizes) > largest_window(self.reference_width):
+            raise ModelFormatError("window_sizes up to %d px do not fit the camera's frames (at most %d px, the "
+                                   "shorter side of a frame %d px wide)" % (max(self.window_sizes),
+                                                                           largest_window(self.reference_width),
+                                                                           self.reference_width))
         if not self.species or len(self.species.split()) != 1:
             raise ModelFormatError("species must be one word")
         if self.colour_kind not in colours.COLOUR_KINDS:
@@ -224,10 +242,13 @@ class TreeModel(object):
             raise ModelFormatError("cnn_onnx must not be empty and cnn_side must be %d..%d px" % CNN_SIDES)
         values = [self.svm_bias, self.edge_threshold, self.window_margin] + list(self.svm_weights)
         values += list(self.crown_ratios)
-        if (not np.all(np.isfinite(values)) or self.window_margin <= 0 or self.reference_width <= 0
-                or not self.crown_ratios or min(self.crown_ratios) <= 0):
-            raise ModelFormatError("model numbers must be finite; margin, crown ratios and reference width "
-                                   "positive")
+        if not np.all(np.isfinite(values)) or not self.crown_ratios:
+            raise ModelFormatError("model numbers must be finite")
+        if not 0 < self.window_margin <= MAX_WINDOW_RATIO:
+            raise ModelFormatError("window_margin must be in (0, %g], got %g" % (MAX_WINDOW_RATIO, self.window_margin))
+        if not (min(self.crown_ratios) > 0 and max(self.crown_ratios) <= MAX_CROWN_RATIO):
+            raise ModelFormatError("crown_ratios must be in (0, %g], got %s"
+                                   % (MAX_CROWN_RATIO, ", ".join("%g" % r for r in self.crown_ratios)))
 
     def score(self, descriptor):
         """SVM decision value of one top-layer descriptor (positive = tree-like)."""
@@ -282,6 +303,24 @@ class TreeModel(object):
         }
 
 
+def largest_window(reference_width):
+    """The largest window side (px) that fits every frame `reference_width` px wide (its shorter side)."""
+    return int(reference_width * FRAME_HEIGHT_PER_WIDTH)
+
+
+def check_network(model, name="model"):
+    """The model's network (if any) loads in OpenCV and gives a logit for one window; ModelFormatError otherwise.
+
+    Without this a network OpenCV cannot read fails on the first frame the camera processes (on the camera:
+    every frame, so the flight sees no tree at all)."""
+    if model.cnn_onnx is None:
+        return
+    import foranav_cnn  # only models with a network need OpenCV's dnn module
+    problem = foranav_cnn.network_problem(model.cnn_onnx, model.cnn_side)
+    if problem:
+        raise ModelFormatError("%s: field cnn_onnx: the network does not run in OpenCV (%s)" % (name, problem))
+
+
 def save_model(model, file_obj):
     """Write the model as an uncompressed .npz to a path or binary file object (use an atomic writer)."""
     np.savez(file_obj, **model.to_arrays())
@@ -298,24 +337,25 @@ def _head(path, count=64):
         return handle.read(count)
 
 
-def load_model(path):
+def load_model(path, name=None):
     """Read a model file; raises ModelFormatError (one line naming the file) for anything unusable.
 
     numpy's own messages are never passed on for files that are not .npz archives: for text they suggest
-    unpickling, which must never be done with a file of unknown origin."""
+    unpickling, which must never be done with a file of unknown origin. `name` names a file object in messages."""
+    label = path if name is None else name
     try:
         head = _head(path)
     except (IOError, OSError) as err:
-        raise ModelFormatError("%s: cannot read the model file (%s)" % (path, getattr(err, "strerror", None) or err))
+        raise ModelFormatError("%s: cannot read the model file (%s)" % (label, getattr(err, "strerror", None) or err))
     if not head:
-        raise ModelFormatError("%s: the model file is empty" % path)
+        raise ModelFormatError("%s: the model file is empty" % label)
     if head.startswith(LFS_POINTER_PREFIX):
-        raise ModelFormatError("%s: a Git LFS pointer, not the model itself (fetch it with 'git lfs pull')" % path)
+        raise ModelFormatError("%s: a Git LFS pointer, not the model itself (fetch it with 'git lfs pull')" % label)
     if head.startswith(NPY_MAGIC):
-        raise ModelFormatError("%s: a single .npy array, not a ForaNav model (.npz archive)" % path)
+        raise ModelFormatError("%s: a single .npy array, not a ForaNav model (.npz archive)" % label)
     if not head.startswith(NPZ_MAGIC):
-        raise ModelFormatError("%s: not a ForaNav model (not an .npz archive)" % path)
-    _check_archive(path)
+        raise ModelFormatError("%s: not a ForaNav model (not an .npz archive)" % label)
+    _check_archive(path, label)
     try:
         with np.load(path, allow_pickle=False) as data:
             arrays = {key: data[key] for key in data.files}
@@ -323,11 +363,13 @@ def load_model(path):
         problem = str(err).splitlines()[0] if str(err) else type(err).__name__
         if "pickle" in problem.lower():
             problem = "it holds Python objects, which a model never does"
-        raise ModelFormatError("%s: damaged or not a model file (%s)" % (path, problem))
-    return model_from_arrays(arrays, path)
+        raise ModelFormatError("%s: damaged or not a model file (%s)" % (label, problem))
+    model = model_from_arrays(arrays, label)
+    check_network(model, label)
+    return model
 
 
-def _check_archive(path):
+def _check_archive(path, label):
     """A readable zip archive whose members all pass their CRC check (before numpy sees it: numpy 1.16 prints
     a stray traceback for a truncated archive)."""
     start = path.tell() if hasattr(path, "read") else None
@@ -335,13 +377,13 @@ def _check_archive(path):
         with zipfile.ZipFile(path) as archive:
             damaged = archive.testzip()
     except (zipfile.BadZipfile, IOError, OSError, EOFError, ValueError, RuntimeError) as err:
-        raise ModelFormatError("%s: damaged or truncated model file (%s)" % (path, str(err).splitlines()[0] if str(err)
+        raise ModelFormatError("%s: damaged or truncated model file (%s)" % (label, str(err).splitlines()[0] if str(err)
                                                                             else type(err).__name__))
     finally:
         if start is not None:
             path.seek(start)
     if damaged is not None:
-        raise ModelFormatError("%s: damaged model file (%s fails its CRC check)" % (path, damaged))
+        raise ModelFormatError("%s: damaged model file (%s fails its CRC check)" % (label, damaged))
 
 
 def _check_field_types(arrays, name):
