@@ -26,6 +26,7 @@ from host_tools.errors import ForaNavError
 from host_tools import fileio
 
 HEADER = ("image", "x_center", "y_center", "width", "height", "label")
+MIN_BOX_PX = 1.0  # a labelled box smaller than one pixel marks nothing (and divides by zero downstream)
 MAX_BOX_PX = 65536.0  # a centre or size beyond this many pixels is no box of an image we can read
 
 
@@ -99,11 +100,15 @@ def _box(csv_path, line_no, row):
         raise ForaNavError("%s: line %d: box fields must be numbers" % (csv_path, line_no))
     if not all(math.isfinite(v) for v in values) or values[2] < 0 or values[3] < 0:
         raise ForaNavError("%s: line %d: box must be finite with non-negative size" % (csv_path, line_no))
+    label = row[5].strip()
+    if label and min(values[2], values[3]) < MIN_BOX_PX:  # an unlabelled row marks an image with no trees
+        raise ForaNavError("%s: line %d: a %g x %g px box of %s; a labelled box is at least %d px wide and high"
+                           % (csv_path, line_no, values[2], values[3], label, MIN_BOX_PX))
     for name, value in zip(HEADER[1:5], values):
         if abs(value) > MAX_BOX_PX:
             raise ForaNavError("%s: line %d: %s %g px is beyond any image (at most %d px)"
                                % (csv_path, line_no, name, value, MAX_BOX_PX))
-    return Box(row[0], *values, row[5].strip())
+    return Box(row[0], *values, label)
 
 
 def boxes_by_image(boxes: Iterable[Box]) -> dict[str, list[Box]]:

@@ -10,6 +10,7 @@ exits with status 2, before any work starts. Use them instead of ``type=float``/
     parser.add_argument("--mount-offset", type=argtypes.finite, nargs=2, action=argtypes.Once)
 """
 import argparse
+import ipaddress
 import math
 from typing import Callable
 
@@ -105,6 +106,28 @@ def udp_endpoint(text: str) -> str:
         return "%s:%d" % parse_udp_endpoint(text)
     except ValueError as err:
         raise argparse.ArgumentTypeError(str(err))
+
+
+MAVLINK_SCHEMES = ("udpout", "udpin", "udp", "udpbcast", "tcp", "tcpin")  # pymavlink's network connections
+
+
+def mavlink_url(text: str) -> str:
+    """'SCHEME:HOST:PORT' for pymavlink's mavlink_connection (udpout:127.0.0.1:14550): a known network scheme,
+    a host that is a valid IPv4 address when it is written as one, a port 1..65535."""
+    scheme, _, rest = str(text).partition(":")
+    if scheme not in MAVLINK_SCHEMES or rest.count(":") != 1 or rest.startswith(":"):
+        raise argparse.ArgumentTypeError("expected SCHEME:HOST:PORT with SCHEME one of %s (e.g. udpout:127.0.0.1:14550), "
+                                         "got %r" % (", ".join(MAVLINK_SCHEMES), text))
+    try:
+        host, port = parse_udp_endpoint(rest)
+    except ValueError as err:
+        raise argparse.ArgumentTypeError(str(err))
+    if all(c.isdigit() or c == "." for c in host):
+        try:
+            ipaddress.IPv4Address(host)
+        except ValueError:
+            raise argparse.ArgumentTypeError("%r is not an IPv4 address (four numbers 0..255), in %r" % (host, text))
+    return "%s:%s:%d" % (scheme, host, port)
 
 
 class Once(argparse.Action):

@@ -87,6 +87,18 @@ def _check_seed(parser: argparse.ArgumentParser, args: argparse.Namespace) -> No
         parser.error("argument --seed: must be an integer from 0 to %d, got %d" % (argtypes.SEED_MAX, value))
 
 
+def _check_empty_values(parser: argparse.ArgumentParser, args: argparse.Namespace, argv: list[str]) -> None:
+    """No option or argument takes an empty text: `--out ''` is no folder, `--tests ''` no test list (argparse
+    would pass '' on, and a command would take it for "not given" and use its default)."""
+    for dest, value in sorted(vars(args).items()):
+        if value == parser.get_default(dest):  # a default of '' means "none", not a user's empty value
+            continue
+        values = value if isinstance(value, (list, tuple)) else [value]
+        if any(isinstance(v, str) and not v.strip() for v in values):
+            option = "--" + dest.replace("_", "-")
+            parser.error("argument %s: empty value" % (option if option in argv else dest))
+
+
 def build_parser() -> OneLineParser:
     parser = OneLineParser(prog="foranav", description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", metavar="<command>")
@@ -107,6 +119,7 @@ def parse_command(argv: list[str]) -> tuple[str, ModuleType, argparse.Namespace]
     module.add_arguments(parser)
     args = parser.parse_args(argv[1:])
     _check_seed(parser, args)
+    _check_empty_values(parser, args, argv)
     return name, module, args
 
 

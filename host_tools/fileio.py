@@ -164,6 +164,8 @@ def read_text(path: str | os.PathLike, what: str = "file", max_bytes: int = MAX_
     try:
         if path.is_dir():
             raise ForaNavError("%s: is a folder, expected a %s" % (path, what))
+        if path.exists() and not path.is_file():  # a FIFO or a device: reading it may never end
+            raise ForaNavError("%s: not a regular file (a FIFO, socket or device), expected a %s" % (path, what))
         with open(path, "rb") as handle:
             data = handle.read(max_bytes + 1)
     except OSError as err:

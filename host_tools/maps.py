@@ -46,6 +46,10 @@ MAX_INTEGER_NUMBER = 10 ** 15  # an integer beyond this in a map is a typo (and 
 # 1e6 m made the simulator allocate terabytes and the app climb until the 900 s limit).
 ALTITUDE_RANGE_M = (0.4, 4.5)
 MAX_COORDINATE_M = 1000.0  # |x|, |y| of a waypoint, tree or object: at 0.1 m/s further is hours of flight
+MAX_NAME_CHARS = 200  # a map's name: a plot title and a console line, not a document
+# Trees and objects of a map: the oracle and the simulator look at every one each frame (9000 frames in a 900 s
+# flight); 2000 trees took 60 s of CPU for one oracle flight here (issue 45), 100,000 never finished.
+MAX_MAP_ITEMS = 1000
 MAX_SIZE_M = 5.0  # crown_m, size_m: larger than the whole frame even at the highest altitude
 
 
@@ -183,6 +187,11 @@ def map_from_dict(data: dict, source: str = "<map>") -> PlantationMap:
     c.fields(data, "", ("name", "altitude_m", "waypoints", "trees"),
              ("objects", "seed", "target_species"))
     name = c.string(data, "name", "")
+    if len(name) > MAX_NAME_CHARS:
+        c.fail("name", "a name of %d characters; at most %d" % (len(name), MAX_NAME_CHARS))
+    for key in ("trees", "objects"):
+        if isinstance(data.get(key), list) and len(data[key]) > MAX_MAP_ITEMS:
+            c.fail(key, "%d %s; a map holds at most %d" % (len(data[key]), key, MAX_MAP_ITEMS))
     altitude = c.number(data, "altitude_m", "", positive=True)
     if not ALTITUDE_RANGE_M[0] <= altitude <= ALTITUDE_RANGE_M[1]:
         c.fail("altitude_m", "must be from %g to %g m (a flight height the camera can work at), got %r"

@@ -12,6 +12,7 @@ from host_tools.maps import ALTITUDE_RANGE_M, COLUMN_RULE_FACTOR
 
 APP_CROWN_M = NavigationParams.crown_size_m  # the app's crownSize parameter (its default)
 AMBIGUITY_MARGIN_M = 0.15
+MIN_COLUMN_SLOT_M = 0.1  # a column is longer than its two end margins by at least this
 MAX_TOTAL_TURN_DEG = 60.0  # the planting direction turns at most this much over a map (bends x bend)
 
 
@@ -64,6 +65,13 @@ class PlantationRanges:
             raise ForaNavError("plantation range column_end_margin_m: at least %.3f m with crown_m from %.2f m and "
                                "lateral_jitter_m up to %.2f m (a tree beyond the column's end stays clear of the "
                                "column rule)" % (-overshoot, self.crown_m[0], self.lateral_jitter_m[1]))
+        # a column must hold a slot for a tree: its length at least both end margins (a column of length 0
+        # made a map with no target at all)
+        min_length = max(2.0 * self.column_end_margin_m[1], 0.0) + MIN_COLUMN_SLOT_M
+        if self.column_length_m[0] < min_length:
+            raise ForaNavError("plantation range column_length_m: at least %.2f m (a tree slot inside column_end_margin_m "
+                               "up to %.2f m at each end), got %r" % (min_length, self.column_end_margin_m[1],
+                                                                   self.column_length_m))
         # a palm of the next column must be outside the app's rule around this column's segment, also where
         # the planting direction has turned (the columns are shifted copies: closer by cos(turn) there)
         rule_and_margin = COLUMN_RULE_FACTOR * APP_CROWN_M + AMBIGUITY_MARGIN_M

@@ -71,7 +71,7 @@ def run(args: argparse.Namespace) -> int:
     crown_px = common.crown_pixels(args)
     settings = settings_for(args, model, crown_px)
     detector = detector_core.TreeDetector(model, settings)
-    images = [(path, dataset.read_image(path)) for path in args.images]  # all readable before any output
+    images = [(path, dataset.read_frame(path)) for path in args.images]  # all readable before any output
     common.check_crown_fits(crown_px, [bgr.shape[1::-1] for _path, bgr in images], "the images")
     warned = set()
     for path, bgr in images:

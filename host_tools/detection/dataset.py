@@ -81,6 +81,15 @@ def read_image(path: str | os.PathLike) -> np.ndarray:
     return images.read_image(path)  # checked header: no huge allocations, truncated files refused
 
 
+def read_frame(path: str | os.PathLike, where: str = "") -> np.ndarray:
+    """An image the detector scans whole: also at least one HOG window (24 px) on its shorter side."""
+    bgr = read_image(path)
+    if min(bgr.shape[:2]) < features.HOG_WINDOW:
+        raise ForaNavError("%s%s: a %dx%d px image; the detector's smallest window needs %d px on each side"
+                           % (where, path, bgr.shape[1], bgr.shape[0], features.HOG_WINDOW))
+    return bgr
+
+
 def load_frames(csv_paths: Sequence[str | os.PathLike], limit: int | None = None,
                 frame_done: Callable[[], None] = lambda: None) -> list[Frame]:
     """Frames of one or more boxes CSVs (image paths relative to each CSV), in file order."""
@@ -88,7 +97,8 @@ def load_frames(csv_paths: Sequence[str | os.PathLike], limit: int | None = None
     for csv_path in csv_paths:
         csv_path = Path(csv_path)
         for image, boxes in annotations.boxes_by_image(annotations.read_boxes(csv_path)).items():
-            frames.append(Frame(str(csv_path.parent / image), read_image(csv_path.parent / image), boxes))
+            frames.append(Frame(str(csv_path.parent / image), read_frame(csv_path.parent / image, "%s: " % csv_path),
+                                boxes))
             frame_done()
             if limit is not None and len(frames) >= limit:
                 return frames

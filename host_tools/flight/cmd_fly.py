@@ -50,7 +50,7 @@ from host_tools.errors import ForaNavError
 from host_tools.flight import camera_factory, run_flight
 from host_tools.flight.components import check_crtp_endpoint
 from host_tools.flight.realtime import run_realtime
-from host_tools.flight.registry import PLANTS, POSITIONINGS, check_options, plant_model_options
+from host_tools.flight.registry import FPS_RANGE, PIXEL_NOISE_RANGE_PX, WIND_RANGE_MPS2, PLANTS, POSITIONINGS, check_options, plant_model_options
 from host_tools.flight.vision_camera import model_option
 from host_tools.maps import load_map, path_length_m
 from host_tools.sim.cli_args import add_appearance_arguments, appearance_from_args, appearance_spec_from_args
@@ -58,8 +58,6 @@ from host_tools.sim.cli_args import add_appearance_arguments, appearance_from_ar
 CAMERA_CHOICES = ("oracle", "sim")
 APP_CHOICES = ("python", "c")
 PROGRESS_EVERY_S = 5.0  # wall-clock seconds between progress lines on stderr
-# Below 2 fps frames come further apart than the app's link watch allows (app.linkHoldMs, 1000 ms)
-FPS_RANGE = (2.0, 120.0)
 LATENCY_MAX_MS = 5000  # app.camLatency is a uint16 and a latency of seconds already means a broken camera
 
 
@@ -75,7 +73,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--hide-tree", type=int, help="hide this tree id from the camera ...")
     parser.add_argument("--hide-s", type=argtypes.nonnegative, default=5.0,
                         help="... for this many seconds from when the app first approaches it (default 5)")
-    parser.add_argument("--pixel-noise", type=argtypes.float_range(0.0, 1000.0), default=None,
+    parser.add_argument("--pixel-noise", type=argtypes.float_range(*PIXEL_NOISE_RANGE_PX), default=None,
                         help="detection centre noise std (px; default oracle 1.5, sim 0 on top of sensor noise)")
     parser.add_argument("--latency-ms", type=argtypes.int_range(0, LATENCY_MAX_MS), default=None,
                         help="camera latency (ms; default sim: one frame, oracle: 50)")
@@ -101,9 +99,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="uwb (default): Loco deck + Flow deck; flow: Flow deck alone (the estimate drifts). "
                              "Reduced plant: the estimate's error model; firmware plant: the decks the Kalman "
                              "filter fuses (--estimator is the older name)")
-    parser.add_argument("--wind", type=argtypes.float_range(0.0, 20.0), default=0.0,
+    parser.add_argument("--wind", type=argtypes.float_range(*WIND_RANGE_MPS2), default=0.0,
                         help="wind gust acceleration std (m/s^2)")
-    parser.add_argument("--mavlink", help="also stream the telemetry live, e.g. udpout:127.0.0.1:14550")
+    parser.add_argument("--mavlink", type=argtypes.mavlink_url, help="also stream the telemetry live, e.g. udpout:127.0.0.1:14550")
     parser.add_argument("--crtp", type=argtypes.udp_endpoint, metavar="[HOST:]PORT", default=None,
                         help="serve CRTP on udp://HOST:PORT for cflib/cfclient (host 127.0.0.1 unless given; "
                              "cflib scans 19850-19859; docs/crtp.md)")

@@ -19,6 +19,7 @@ from host_tools import argtypes
 from host_tools.errors import ForaNavError
 from host_tools.flight.replay import replay_clip
 from host_tools.maps import load_map
+from host_tools.flight.registry import FPS_RANGE
 from host_tools.sim.clip import read_clip
 
 LATENCY_MAX_MS = 5000  # as fly --latency-ms
@@ -63,6 +64,9 @@ def print_report(report: dict, out: TextIO | None = None) -> None:
 
 def run(args: argparse.Namespace) -> int:
     clip = read_clip(args.clip)
+    if not FPS_RANGE[0] <= clip.fps <= FPS_RANGE[1]:
+        raise ForaNavError("%s: fps: a clip at %g fps; the app flies on %g to %g frames per second (its camera "
+                           "link watch is 1 s)" % ((clip.directory / "clip.json", clip.fps) + FPS_RANGE))
     clip.check_video()
     pmap = load_map(args.map) if args.map else None
     if args.latency_ms is not None and args.latency_ms < 0:

@@ -23,7 +23,7 @@ from crazyflie_app.app.navigation_core import (PHASE_APPROACH, PHASE_DONE, PHASE
                                            rotate)
 from host_tools.errors import ForaNavError
 from host_tools.flight.registry import Camera, app_factory
-from host_tools.flight.telemetry import TlogWriter
+from host_tools.flight.telemetry import TlogWriter, connect_live
 from host_tools.flight.wire import PtyWire
 from host_tools.maps import PlantationMap
 
@@ -136,11 +136,14 @@ def open_tlog(out_dir: str | os.PathLike | None, options: dict) -> TlogWriter | 
     """The MAVLink log of a flight in ``out_dir`` (teed to options["mavlink"]), or None without out_dir."""
     if out_dir is None:
         return None
+    live = None
+    if options["mavlink"]:  # first: a refused endpoint leaves no (empty) output folder behind
+        try:
+            live = connect_live(options["mavlink"])
+        except Exception as err:  # pymavlink raises socket, serial or OS errors for a bad URL
+            raise ForaNavError("--mavlink %s: cannot open: %s" % (options["mavlink"], err))
     Path(out_dir).mkdir(parents=True, exist_ok=True)
-    try:
-        return TlogWriter(Path(out_dir) / "flight.tlog", live_url=options["mavlink"])
-    except Exception as err:  # pymavlink raises socket, serial or OS errors for a bad URL
-        raise ForaNavError("--mavlink %s: cannot open: %s" % (options["mavlink"], err))
+    return TlogWriter(Path(out_dir) / "flight.tlog", live=live)
 
 
 def _bind_error(endpoint: str, err: OSError) -> ForaNavError:

@@ -22,6 +22,12 @@ DEFAULT_OPTIONS = {
 }
 POSITIONINGS = ("uwb", "flow")  # Loco deck + Flow deck, or the Flow deck alone
 
+# Camera frame rates the app can fly on: below 2 fps frames come further apart than its link watch allows
+# (app.linkHoldMs, 1000 ms). fly --fps, and a replayed clip's own rate.
+FPS_RANGE = (2.0, 120.0)
+PIXEL_NOISE_RANGE_PX = (0.0, 1000.0)  # added to each detection: beyond that no detection lands in a frame
+WIND_RANGE_MPS2 = (0.0, 20.0)  # gusts: 2 g, far past what the plant flies
+
 
 class Camera(Protocol):
     """What the harness asks of a camera (see the harness docstring); ``mount_offset`` is optional."""

@@ -39,18 +39,24 @@ class _TimestampedFile:
     def write(self, buf: bytes) -> None:
         self.fileobj.write(struct.pack(">Q", self.t_us) + bytes(buf))
         if self.live is not None:
-            self.live.write(bytes(buf))
+            try:
+                self.live.write(bytes(buf))
+            except OSError:  # the ground station's network went away: the tlog goes on, the live copy stops
+                self.live = None
+
+
+def connect_live(url: str) -> Any:
+    """pymavlink's connection for a live copy of the stream (e.g. 'udpout:127.0.0.1:14550')."""
+    return mavutil.mavlink_connection(url, source_system=SYSTEM_ID, source_component=COMPONENT_ID, dialect="common")
 
 
 class TlogWriter:
     """Write telemetry; every method takes the simulated time in ms."""
 
-    def __init__(self, path: str | os.PathLike, live_url: str | None = None):
+    def __init__(self, path: str | os.PathLike, live_url: str | None = None, live: Any = None):
         self.path = str(path)
-        live = None
         if live_url:  # first: a bad URL must fail before any file exists
-            live = mavutil.mavlink_connection(live_url, source_system=SYSTEM_ID, source_component=COMPONENT_ID,
-                                              dialect="common")
+            live = connect_live(live_url)
         self._live = live
         self._tmp_path = self.path + ".part"  # renamed over path by close(): never a half-written .tlog
         self._file = open(self._tmp_path, "wb")

@@ -15,6 +15,8 @@ Coordinate = float | np.ndarray  # a scalar, or an array of them (vectorised)
 METRES_PER_PIXEL_PER_METRE_AT_352 = 0.0031  # the paper's flight code
 REFERENCE_WIDTH = 352
 FOCAL_PX_AT_352 = 1.0 / METRES_PER_PIXEL_PER_METRE_AT_352  # 322.58 px
+MOUNT_OFFSET_RANGE_M = (-1.0, 1.0)  # a camera on a MAV sits within a metre of its centre
+HEIGHT_RANGE_M = (0.05, 100.0)  # camera above the ground: below, no crown fits; above, a tree is a pixel
 SENSOR_MODES = ((352, 288), (640, 480), (1280, 1024), (320, 240))  # JeVois-A33 (OV9653); first = default
 
 
@@ -50,6 +52,10 @@ class CameraModel:
             raise ValueError("unknown sensor mode %dx%d" % (width, height))
         self.width = int(width)
         self.height = int(height)
+        if len(mount_offset) != 2 or not all(math.isfinite(float(v)) and MOUNT_OFFSET_RANGE_M[0] <= float(v)
+                                             <= MOUNT_OFFSET_RANGE_M[1] for v in mount_offset):
+            raise ValueError("mount_offset must be two numbers (forward, left) in [%g, %g] m, got %r"
+                             % (MOUNT_OFFSET_RANGE_M + (list(mount_offset),)))
         self.mount_offset = (float(mount_offset[0]), float(mount_offset[1]))
         self.focal_px = FOCAL_PX_AT_352 * self.width / REFERENCE_WIDTH
 

@@ -6,13 +6,13 @@ from pathlib import Path
 
 from host_tools import argtypes
 from host_tools.errors import ForaNavError
-from host_tools.sim.camera import CameraModel, SENSOR_MODES
+from host_tools.sim.camera import HEIGHT_RANGE_M, MOUNT_OFFSET_RANGE_M, CameraModel, SENSOR_MODES
 from host_tools.sim.crowns import Appearance, AppearanceSpec, load_appearance
 from host_tools.sim.world import NO_EFFECTS, SENSOR_EFFECTS, World
 
 EFFECT_PRESETS = {"none": NO_EFFECTS, "sensor": SENSOR_EFFECTS}
-MOUNT_OFFSET_M = argtypes.float_range(-1.0, 1.0)  # a camera on a MAV sits within a metre of its centre
-ALTITUDE_M = argtypes.float_range(0.05, 100.0)  # above the ground, below where a tree is a pixel
+MOUNT_OFFSET_M = argtypes.float_range(*MOUNT_OFFSET_RANGE_M)
+ALTITUDE_M = argtypes.float_range(*HEIGHT_RANGE_M)
 
 
 def add_camera_arguments(parser: argparse.ArgumentParser) -> None:

@@ -38,7 +38,7 @@ import numpy as np
 
 from host_tools import fileio
 from host_tools.errors import ForaNavError
-from host_tools.sim.camera import CameraModel, Pose
+from host_tools.sim.camera import HEIGHT_RANGE_M, CameraModel, Pose
 from host_tools.sim.world import Frame, ObjectInView, TreeInView
 
 FORMAT = "foranav-clip"
@@ -217,6 +217,9 @@ def clip_from_dict(data: dict, directory: str | os.PathLike, source_name: str = 
             fail("frames[%d]" % i, "bad frame record (%s)" % (err,))
         if not all(math.isfinite(v) for v in (frame.t_s,) + tuple(frame.pose)):
             fail("frames[%d]" % i, "time and pose must be finite")
+        if not HEIGHT_RANGE_M[0] <= frame.pose.z <= HEIGHT_RANGE_M[1]:
+            fail("frames[%d].pose.z" % i, "camera height %g m; a camera sees the ground from %g to %g m"
+                 % ((frame.pose.z,) + HEIGHT_RANGE_M))
         if frame.index != i:
             fail("frames[%d].index" % i, "expected %d, got %d" % (i, frame.index))
         if frames and not frame.t_s > frames[-1].t_s:

@@ -191,6 +191,13 @@ def ground_from_photo(photo: np.ndarray, gsd_m: float, height: int, width: int, 
     """HxWx3 float32: the photo at the mosaic's resolution, tiled with mirrored copies, times ``light``."""
     scale = gsd_m / metres_per_pixel
     size = (max(1, int(round(photo.shape[1] * scale))), max(1, int(round(photo.shape[0] * scale))))
+    if size[0] > width or size[1] > height:
+        # more photo than the ground holds (a 100000 x 1 px strip, a huge --ground-gsd): only the part that
+        # covers the ground is resized, so the tile is never larger than the ground on either side
+        keep = (min(photo.shape[1], int(math.ceil(width / scale)) + 1),
+                min(photo.shape[0], int(math.ceil(height / scale)) + 1))
+        photo = photo[:keep[1], :keep[0]]
+        size = (max(1, min(width, int(round(keep[0] * scale)))), max(1, min(height, int(round(keep[1] * scale)))))
     tile = cv2.resize(photo, size, interpolation=cv2.INTER_AREA if scale < 1 else cv2.INTER_CUBIC)
     tile = tile.astype(np.float32) * np.float32(light)
     block = np.concatenate([tile, tile[:, ::-1]], axis=1)

@@ -15,7 +15,7 @@ import os
 import time
 
 from host_tools.flight.stages import STAGES
-from host_tools.sweep.runner import fly_on, open_client
+from host_tools.sweep.runner import close_client, fly_on, open_client
 from host_tools.sweep.specs import make_specs
 
 DEFAULT_COUNT = 6
@@ -33,8 +33,7 @@ def _timed(workers, specs, warmup):
         fly_on(client, specs, results.append, key_prefix="bench-%d" % workers)
         wall = time.perf_counter() - wall0
     finally:
-        client.close()
-        cluster.close()
+        close_client(client, cluster)
     return _row(workers, results, wall)
 
 

@@ -29,7 +29,8 @@ from collections.abc import Sequence
 import numpy as np
 
 from host_tools.errors import ForaNavError
-from host_tools.flight import cmd_fly, oracle, vision_camera
+from host_tools.flight import cmd_fly, oracle, registry, vision_camera
+from host_tools.sim.camera import MOUNT_OFFSET_RANGE_M
 
 FAULT_PRESETS = {
     "none": {},
@@ -43,6 +44,12 @@ FAULT_PRESETS = {
 CONDITION_NAMES = ("dropout", "pixel_noise_px", "latency_frames", "fps", "wind_mps2", "flow_probability",
                    "cam_offset_m")
 CAMERAS = ("sim", "oracle")
+# Each condition within what its fly option accepts (a sweep runs `fly` with it): checked here, in the parent,
+# so a NaN, inf or 1e9 is one line before any Dask worker starts (issue 45: workers died and the scheduler
+# gave up). latency_frames: frames of delay, fly --latency-ms at most 5000 ms at the slowest 2 fps = 10 frames.
+CONDITION_BOUNDS = {"dropout": (0.0, 1.0), "pixel_noise_px": registry.PIXEL_NOISE_RANGE_PX,
+                    "latency_frames": (0.0, 10.0), "fps": registry.FPS_RANGE, "wind_mps2": registry.WIND_RANGE_MPS2,
+                    "flow_probability": (0.0, 1.0), "cam_offset_m": MOUNT_OFFSET_RANGE_M}
 
 
 def preset(name: str, overrides: dict | None = None) -> dict:
@@ -58,6 +65,10 @@ def preset(name: str, overrides: dict | None = None) -> dict:
                 raise ForaNavError("--condition flow_probability: must be in [0, 1], got %r" % (value,))
         elif len(value) != 2 or value[0] > value[1]:
             raise ForaNavError("--condition %s: expected LO:HI with LO <= HI, got %r" % (key, value))
+        lo, hi = CONDITION_BOUNDS[key]
+        if not all(lo <= v <= hi for v in (value if isinstance(value, tuple) else (value,))):
+            raise ForaNavError("--condition %s: must lie in [%g, %g] (what fly accepts), got %r"
+                               % (key, lo, hi, value))
         spec[key] = value
     if "dropout" in spec and not 0.0 <= spec["dropout"][0] <= spec["dropout"][1] <= 1.0:
         raise ForaNavError("--condition dropout: must lie in [0, 1]")

@@ -8,6 +8,8 @@ cluster. The task is ``fly_task(spec)``: it never raises (a flight that raises c
 traceback), so one bad flight never stops a sweep; a worker that dies is recorded the same way.
 """
 import os
+import shutil
+import tempfile
 import platform
 import resource
 import time
@@ -74,11 +76,28 @@ def open_client(scheduler: str | None = None, workers: int | None = None) -> tup
         except (OSError, TimeoutError) as err:
             raise ForaNavError("--scheduler %s: cannot connect: %s" % (scheduler, err))
     workers = workers or os.cpu_count() or 1
-    with dask.config.set({"distributed.nanny.pre-spawn-environ." + name: value
-                          for name, value in WORKER_MALLOC_ENVIRON.items()}):
+    # the workers' scratch space and lock files in a folder of this sweep's own, removed by close_client
+    # (Dask's default, TMPDIR/dask-scratch-space, kept a lock file per worker after every sweep)
+    scratch = tempfile.mkdtemp(prefix="foranav-dask-")
+    settings = {"distributed.nanny.pre-spawn-environ." + name: value for name, value in WORKER_MALLOC_ENVIRON.items()}
+    settings["temporary-directory"] = scratch
+    with dask.config.set(settings):
         cluster = LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True,
-                               dashboard_address=":0", silence_logs=40)
+                               dashboard_address=":0", silence_logs=40, local_directory=scratch)
+    dask.config.set({"temporary-directory": scratch})  # the scheduler's and client's lock files too
+    _scratch_folders[id(cluster)] = scratch
     return Client(cluster), cluster
+
+
+_scratch_folders: dict = {}  # id(LocalCluster) -> its scratch folder
+
+
+def close_client(client: Any, cluster: Any) -> None:
+    """Close the client, and the LocalCluster open_client started (with its scratch folder)."""
+    client.close()
+    if cluster is not None:
+        cluster.close()
+        shutil.rmtree(_scratch_folders.pop(id(cluster), ""), ignore_errors=True)
 
 
 def fly_on(client: Any, specs: Sequence[dict], on_result: Callable[[dict], None], key_prefix: str = "flight") -> None:
@@ -118,8 +137,6 @@ def run_sweep(specs: Sequence[dict], store: SweepStore, *, scheduler: str | None
         store.record_attempts([s["index"] for s in todo])
         fly_on(client, todo, on_result, key_prefix="flight-%d-%d" % (os.getpid(), store.run or 0))
     finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
+        close_client(client, cluster)
     counts["wall_s"] = round(time.monotonic() - started, 2)
     return counts

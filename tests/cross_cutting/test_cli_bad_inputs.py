@@ -85,6 +85,23 @@ def inputs(tmp_path_factory):
     (root / "duplicated_rows.csv").write_text(CSV_HEADER + "a.png,100,100,60,60,oil_palm\n" * 3)
     (root / "duplicated_crops.csv").write_text("image,class,category\n" + "pos/1.png,pos,oil_palm\n" * 2)
     (root / "big_field.csv").write_text(CSV_HEADER + "a.png,1,1,1,1," + "x" * (FIELD_LIMIT + 10) + "\n")
+    # issue 45: sizes beyond what the program can do, files that hang a reader, clips the app cannot fly
+    (root / "zero_box.csv").write_text(CSV_HEADER + "a.png,10,10,60,60,oil_palm\na.png,90,90,0,60,oil_palm\n")
+    cv2.imwrite(str(root / "one_px.png"), np.zeros((1, 1, 3), np.uint8))
+    (root / "one_px.csv").write_text(CSV_HEADER + "one_px.png,0,0,1,1,oil_palm\n")
+    cv2.imwrite(str(root / "strip.png"), np.zeros((1, 100000, 3), np.uint8))
+    write_map(root / "long_name.json", name="x" * 5 * 1024 * 1024)
+    write_map(root / "many_trees.json", trees=[{"id": i, "x": 1.0 + i * 1e-5, "y": 0.0, "species": "oil_palm",
+                                               "crown_m": 0.3} for i in range(1, 100001)])
+    os.mkfifo(root / "fifo.json")
+    for name, change in (("slow_clip", lambda d: d.update(fps=0.5)),
+                         ("z0_clip", lambda d: d["frames"][2]["pose"].update(z=0)),
+                         ("zneg_clip", lambda d: d["frames"][2]["pose"].update(z=-1.0)),
+                         ("offset_nan_clip", lambda d: d["camera"].update(mount_offset=[float("nan"), 0.0]))):
+        data = json.loads((FIXTURE_CLIP / "clip.json").read_text())
+        change(data)
+        (root / name).mkdir()
+        (root / name / "clip.json").write_text(json.dumps(data))
     # a Latin-1 name far down a long CSV (past any reader's first buffer)
     rows = "".join("f%04d.png,10,10,5,5,oil_palm\n" % i for i in range(600))
     (root / "latin1.csv").write_bytes((CSV_HEADER + rows).encode() + b"caf\xe9.png,10,10,5,5,oil_palm\n")
@@ -311,6 +328,46 @@ CASES = [
     (["split", "--data", path, "--out", "s"], named) for path, named in CSV_ROWS] + [
     (["synth", "--out", "data", "--count", "2", "--crowns", path], named) for path, named in CSV_ROWS] + [
     (["fly", "--map", "map1", "--crowns", path], named) for path, named in CSV_ROWS] + [
+    # issue 45: each class once per command that has it
+    (["train", "--species", "oil_palm", "--data", "{in}/zero_box.csv", "--out", "keep.npz"],
+     "zero_box.csv: line 3: a 0 x 60 px box"),
+    (["evaluate", "--model", "oil_palm", "--data", "{in}/one_px.csv"], "one_px.png: a 1x1 px image"),
+    (["detect", "{in}/one_px.png"], "one_px.png: a 1x1 px image"),
+    (["evaluate", "--model", "oil_palm", "--data", "{in}/one_px.csv", "--crown-px", "1e9"], "--crown-px"),
+    (["evaluate", "--model", "oil_palm", "--data", "{in}/one_px.csv", "--crops", "1000000000"], "--crops"),
+    (["evaluate", "--model", "oil_palm", "--data", "{in}/one_px.csv", "--plot", "pr.bmpx"], "--plot"),
+    (["evaluate", "--model", "oil_palm", "--data", "{in}/one_px.csv", "--plot", "afile/pr.png"], "--plot"),
+    (["evaluate", "--model", "oil_palm", "--data", "{in}/one_px.csv", "--plot", "existing_dir"], "--plot"),
+    (["evaluate", "--model", "oil_palm", "--data", "{in}/one_px.csv", "--plot", "ro/pr.png"], "--plot"),
+    (["detect", "{in}/one_px.png", "--step", "0"], "--step"),
+    (["train", "--species", "oil_palm", "--data", "{in}/big_field.csv", "--out", "keep.npz", "--report", "afile"],
+     "--report"),
+    (["train", "--species", "oil_palm", "--data", "{in}/big_field.csv", "--out", "keep.npz", "--report", "ro/r"],
+     "--report"),
+    (["train", "--species", "oil_palm", "--data", "{in}/big_field.csv", "--out", "n" * 300 + ".npz"], "--out"),
+    (["render", "--map", "map1", "--x", "1", "--y", "0", "--out", "n" * 300 + ".png"], "a name of 304 bytes"),
+    (["package", "--vendor", "V" * 300, "--out", "x.jvpkg"], "--vendor"),
+    (["deploy", "--sd", "no_such_card", "--vendor", "V" * 300], "--vendor"),
+    (FLY + ["--mavlink", "udpout:127.0.0.1:99999", "--out", "fo"], "--mavlink"),
+    (FLY + ["--mavlink", "udpout:256.0.0.1:14550", "--out", "fo"], "--mavlink"),
+    (FLY + ["--mavlink", "14550", "--out", "fo"], "--mavlink"),
+    (FLY + ["--out", ""], "--out"),
+    (["paper-tests", "--tests", "", "--out", "paper"], "--tests"),
+    (["plantation", "--column-length-m", "0", "--out", "p.json"], "--column-length-m"),
+    (["fly", "--map", "{in}/long_name.json", "--camera", "oracle"], "long_name.json: name: a name of"),
+    (["fly", "--map", "{in}/many_trees.json", "--camera", "oracle"], "many_trees.json: trees: 100000 trees"),
+    (["fly", "--map", "{in}/fifo.json", "--camera", "oracle"], "fifo.json: not a regular file"),
+    (["render", "--map", "{in}/fifo.json", "--x", "1", "--y", "0", "--out", "keep.png"], "fifo.json"),
+    (["replay", "{in}/slow_clip"], "slow_clip/clip.json: fps: a clip at 0.5 fps"),
+    (["replay", "{in}/z0_clip"], "frames[2].pose.z"),
+    (["replay", "{in}/zneg_clip"], "frames[2].pose.z"),
+    (["replay", "{in}/offset_nan_clip"], "mount_offset"),
+    (["sweep", "--count", "2", "--condition", "wind_mps2=nan:nan", "--out", "sw"], "--condition wind_mps2"),
+    (["sweep", "--count", "2", "--condition", "latency_frames=0:inf", "--out", "sw"], "--condition latency_frames"),
+    (["sweep", "--count", "2", "--condition", "pixel_noise_px=0:1e9", "--out", "sw"], "--condition pixel_noise_px"),
+    (["sweep", "--count", "2", "--condition", "cam_offset_m=nan:0", "--out", "sw"], "--condition cam_offset_m"),
+    (["sweep", "--count", "2", "--condition", "fps=1e9:1e9", "--out", "sw"], "--condition fps"),
+    (["bench", "sim", "--model", "oil_palm"], "--model: only with bench detector or recall"),
     # the command itself
     (["nosuch"], "nosuch"),
     ([], "command"),

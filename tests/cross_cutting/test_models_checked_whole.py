@@ -164,3 +164,24 @@ def test_that_a_file_name_of_300_characters_is_refused_and_a_long_valid_one_writ
     err = capsys.readouterr().err.splitlines()
     assert code == 2 and len(err) == 1 and "a name of 304 bytes" in err[0], err
     assert sorted(p.name for p in tmp_path.iterdir()) == [long_ok]
+
+
+@pytest.mark.parametrize("shape, gsd", [((1, 100000), "0.01"), ((100, 100), "1e9")])
+def test_that_a_ground_photo_of_any_shape_or_scale_renders_within_the_grounds_size(shape, gsd, tmp_path):
+    # a 100000 x 1 px strip asked numpy for 40 GiB; a gsd of 1e9 made OpenCV refuse its own size (issue 45)
+    import cv2
+    cv2.imwrite(str(tmp_path / "ground.png"), np.full(shape + (3,), 90, np.uint8))
+    assert cli.main(["render", "--map", "map1", "--x", "1", "--y", "0", "--ground", str(tmp_path / "ground.png"),
+                     "--ground-gsd", gsd, "--out", str(tmp_path / "frame.png")]) == 0
+    assert cv2.imread(str(tmp_path / "frame.png")).shape == (288, 352, 3)
+
+
+def test_that_a_sweep_leaves_no_dask_files_in_tmpdir(tmp_path, monkeypatch):
+    import tempfile
+    pytest.importorskip("dask.distributed")
+    monkeypatch.setenv("TMPDIR", str(tmp_path / "tmp"))
+    (tmp_path / "tmp").mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", None)  # re-read TMPDIR
+    assert cli.main(["sweep", "--count", "1", "--workers", "1", "--camera", "oracle", "--out",
+                     str(tmp_path / "sweep")]) == 0
+    assert list((tmp_path / "tmp").iterdir()) == []
