@@ -13,10 +13,13 @@ import numpy as np
 
 from host_tools.maps import PlantationMap, Tree
 from host_tools.sim.camera import CameraModel, Pose
-from jevois_module.ForaNavTrees import foranav_detector, foranav_serial
+from jevois_module.ForaNavTrees import foranav_serial
 
 DEFAULT_FRAME_PERIOD_MS = 100  # ~10 fps (the paper's detector runs at 8.9 fps on the JeVois)
 DEFAULT_LATENCY_MS = 50
+# the app takes at most 64 detections of a frame (NAV_MAX_FRAME_DETECTIONS): the oracle sends no more (10,000
+# trees in view sent lines faster than the serial link carries them)
+MAX_LINES_PER_FRAME = 64
 DEFAULT_PIXEL_NOISE_PX = 1.5
 
 
@@ -70,7 +73,7 @@ class OracleCamera:
             # draw both random numbers for every tree so dropout does not shift the noise sequence
             noise = self._rng.normal(0.0, self.pixel_noise_px, 2) if self.pixel_noise_px > 0 else (0.0, 0.0)
             keep = self._rng.random() >= self.dropout
-            if keep and len(lines) < foranav_detector.DEFAULT_MAX_DETECTIONS:  # the camera's maxtrees: no more
+            if keep and len(lines) < MAX_LINES_PER_FRAME:
                 lines.append(foranav_serial.format_t2(u + noise[0], v + noise[1], self.width, self.height))
         if self.frame_marks:
             lines.append(foranav_serial.FRAME_STOP)

@@ -7,16 +7,25 @@ same bytes. Dialect ``common``, MAVLink 2, system 1 / component 1 (an autopilot,
 Frames: Crazyflie world is FLU (x forward, y left, z up); MAVLink local is NED with north := Crazyflie +x,
 so x_N = x, y_E = -y, z_D = -z and yaw_NED = -yaw.
 
-Messages: HEARTBEAT (1 Hz; custom_mode = app phase, system_status from the supervisor), LOCAL_POSITION_NED
-of the estimate, DEBUG_VECT "gt_pos" of the ground truth and DEBUG_VECT "est_err" of the estimate's error
+Messages: HEARTBEAT (1 Hz; custom_mode = the ArduCopter mode nearest the app's phase (COPTER_MODES), so
+MAVExplorer, mavflightmodes and QGroundControl name it, system_status from the supervisor) with NAMED_VALUE_INT
+"phase" (the app's own phase number, nav_types.PHASE_NAMES), LOCAL_POSITION_NED of the estimate, and the same
+position on the globe from a geo-reference (GeoReference: the map origin's latitude/longitude and the bearing of
+the map's +x axis; DEFAULT_GEO unless given) as GLOBAL_POSITION_INT and GPS_RAW_INT (3D fix), so ground
+stations draw the track on a map and mavtogpx / mavflighttime read it, DEBUG_VECT "gt_pos" of the ground truth and DEBUG_VECT "est_err" of the estimate's error
 (x, y in NED metres, z = yaw error in degrees, NED sign) (10 Hz), POSITION_TARGET_LOCAL_NED per accepted
 setpoint (type mask 2531: vx, vy, z, yaw), LANDING_TARGET per detection (angles from the pixel, distance =
-height, target_num = tree id), STATUSTEXT per console line (split into 50-character chunks).
+height, target_num = tree id), STATUSTEXT per console line: each line a fresh id (1..65535, MAVLink 2's
+chunk id: a ground station joins only the chunks of one id), split into 50-character chunks, a line of a
+multiple of 50 characters closed by an empty chunk (the receiver's end-of-message).
 """
 import math
 import os
 import struct
+from dataclasses import dataclass
 from typing import Any, BinaryIO
+
+from crazyflie_app.app.nav_types import PHASE_NAMES
 
 os.environ.setdefault("MAVLINK20", "1")
 from pymavlink import mavutil  # noqa: E402
@@ -26,6 +35,39 @@ EPOCH_US = 1741132800 * 1000000  # 2025-03-05T00:00:00Z: a fixed origin keeps th
 SYSTEM_ID, COMPONENT_ID = 1, 1
 TYPE_MASK_HOVER = 2531  # use vx, vy, z, yaw (crazyflie.md 6.5)
 STATUSTEXT_CHUNK = 50
+EARTH_RADIUS_M = 6371000.0  # mean radius: metres to degrees over a plantation (error < 0.5 %)
+# ArduCopter mode numbers (pymavlink's mode_mapping_acm, what mavutil names a quadrotor's custom_mode by) for the
+# app's phases, by meaning: on the ground STABILIZE, taking off and flying to a point GUIDED, along the path AUTO,
+# searching for a lost tree LOITER, landing and landed LAND. The exact phase is NAMED_VALUE_INT "phase".
+COPTER_MODES = {"BOOT": 0, "TAKEOFF": 4, "FOLLOW_PATH": 3, "APPROACH": 4, "RECOVERY": 5, "RETURN_TO_PATH": 4,
+                "LAND": 9, "DONE": 9, "NO_DECK": 0, "NO_CAMERA": 0}
+
+
+@dataclass(frozen=True)
+class GeoReference:
+    """Where the map's origin is on the globe, and the compass bearing (deg, clockwise from north) of its +x."""
+    lat_deg: float
+    lon_deg: float
+    heading_deg: float = 0.0
+    altitude_m: float = 0.0  # above mean sea level, of the ground
+
+    def to_global(self, x: float, y: float) -> tuple[float, float]:
+        """(lat_deg, lon_deg) of map point (x forward, y left)."""
+        h = math.radians(self.heading_deg)
+        north = x * math.cos(h) + y * math.sin(h)
+        east = x * math.sin(h) - y * math.cos(h)
+        lat = self.lat_deg + math.degrees(north / EARTH_RADIUS_M)
+        lon = self.lon_deg + math.degrees(east / (EARTH_RADIUS_M * math.cos(math.radians(self.lat_deg))))
+        return lat, lon
+
+
+# An oil palm estate in Selangor, Malaysia, map +x due north: where a map gives no geo-reference
+DEFAULT_GEO = GeoReference(lat_deg=2.95, lon_deg=101.45, heading_deg=0.0, altitude_m=20.0)
+
+
+def _cm(speed_mps: float) -> int:
+    """m/s -> cm/s in an int16 field."""
+    return max(-32767, min(32767, int(round(speed_mps * 100))))
 
 
 class _TimestampedFile:
@@ -53,8 +95,10 @@ def connect_live(url: str) -> Any:
 class TlogWriter:
     """Write telemetry; every method takes the simulated time in ms."""
 
-    def __init__(self, path: str | os.PathLike, live_url: str | None = None, live: Any = None):
+    def __init__(self, path: str | os.PathLike, live_url: str | None = None, live: Any = None,
+                 geo: GeoReference = DEFAULT_GEO):
         self.path = str(path)
+        self.geo = geo
         if live_url:  # first: a bad URL must fail before any file exists
             live = connect_live(live_url)
         self._live = live
@@ -75,11 +119,27 @@ class TlogWriter:
         if armed:
             base_mode |= mavlink2.MAV_MODE_FLAG_SAFETY_ARMED
         self.mav.heartbeat_send(mavlink2.MAV_TYPE_QUADROTOR, mavlink2.MAV_AUTOPILOT_GENERIC, base_mode,
-                                int(phase), system_status)
+                                COPTER_MODES[PHASE_NAMES[int(phase)]], system_status)
+        self._at(t_ms)
+        self.mav.named_value_int_send(int(t_ms), b"phase", int(phase))
 
     def local_position(self, t_ms: int, x: float, y: float, z: float, vx: float, vy: float, vz: float) -> None:
+        """The estimate: LOCAL_POSITION_NED, and on the globe GLOBAL_POSITION_INT and GPS_RAW_INT."""
         self._at(t_ms)
         self.mav.local_position_ned_send(int(t_ms), x, -y, -z, vx, -vy, -vz)
+        lat, lon = self.geo.to_global(x, y)
+        h = math.radians(self.geo.heading_deg)
+        v_north, v_east = vx * math.cos(h) + vy * math.sin(h), vx * math.sin(h) - vy * math.cos(h)
+        speed = math.hypot(v_north, v_east)
+        course = math.degrees(math.atan2(v_east, v_north)) % 360.0
+        lat_e7, lon_e7 = int(round(lat * 1e7)), int(round(lon * 1e7))
+        alt_mm = int(round((self.geo.altitude_m + z) * 1000))
+        self._at(t_ms)
+        self.mav.global_position_int_send(int(t_ms), lat_e7, lon_e7, alt_mm, int(round(z * 1000)),
+                                          _cm(v_north), _cm(v_east), _cm(-vz), 65535)
+        self._at(t_ms)
+        self.mav.gps_raw_int_send(EPOCH_US + int(t_ms) * 1000, 3, lat_e7, lon_e7, alt_mm, 100, 100,
+                                  min(int(round(speed * 100)), 65534), int(round(course * 100)) % 36000, 10)
 
     def ground_truth(self, t_ms: int, x: float, y: float, z: float) -> None:
         self._at(t_ms)
@@ -108,7 +168,9 @@ class TlogWriter:
     def status_text(self, t_ms: int, text: str, severity: int = mavlink2.MAV_SEVERITY_INFO) -> None:
         data = text.encode("ascii", "replace")
         chunks = [data[i:i + STATUSTEXT_CHUNK] for i in range(0, len(data), STATUSTEXT_CHUNK)] or [b""]
-        self._status_id = self._status_id % 65535 + 1 if len(chunks) > 1 else 0
+        if len(chunks) > 1 and len(chunks[-1]) == STATUSTEXT_CHUNK:
+            chunks.append(b"")  # a full last chunk has no terminating NUL: the receiver would wait for more
+        self._status_id = self._status_id % 65535 + 1  # a fresh id per line, also for one chunk
         for seq, chunk in enumerate(chunks):
             self._at(t_ms)
             self.mav.statustext_send(severity, chunk, id=self._status_id, chunk_seq=seq)
