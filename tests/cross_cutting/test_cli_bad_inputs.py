@@ -567,3 +567,35 @@ def test_that_detect_refuses_a_truncated_jpeg_and_a_non_utf8_crops_csv(tmp_path,
         assert cli.main(argv) == 2
         err = capsys.readouterr().err.splitlines()
         assert len(err) == 1 and named in err[0], err
+
+
+ERRORS_DOC = Path(__file__).resolve().parents[2] / "docs" / "errors.md"
+TALLY_START, TALLY_END = "<!-- bad-input tally: start -->", "<!-- bad-input tally: end -->"
+
+
+def bad_input_tally() -> str:
+    """docs/errors.md's table: the bad inputs of CASES per command; each must end as the test above asserts
+    (refused: exit 2, one line naming the option or file, nothing written). `python -m
+    tests.cross_cutting.test_cli_bad_inputs` prints it."""
+    counts = {}
+    for argv, _named in CASES:
+        command = argv[0] if argv and argv[0] in cli.COMMANDS else "(no or unknown command)"
+        counts[command] = counts.get(command, 0) + 1
+    rows = ["| command | bad inputs | refused in one line, exit 2, nothing written |", "|---|---:|---:|"]
+    rows += ["| %s | %d | %d |" % (command, count, count) for command, count in sorted(counts.items())]
+    rows.append("| all | %d | %d |" % (len(CASES), len(CASES)))
+    return "\n".join([TALLY_START] + rows + [TALLY_END])
+
+
+def test_that_the_tally_in_errors_md_is_the_table_of_this_file():
+    text = ERRORS_DOC.read_text()
+    assert bad_input_tally() in text, "run: python -m tests.cross_cutting.test_cli_bad_inputs --write"
+
+
+if __name__ == "__main__":
+    tally = bad_input_tally()
+    if "--write" in sys.argv:
+        text = ERRORS_DOC.read_text()
+        start, end = text.index(TALLY_START), text.index(TALLY_END) + len(TALLY_END)
+        ERRORS_DOC.write_text(text[:start] + tally + text[end:])
+    print(tally)
