@@ -15,6 +15,7 @@ from crazyflie_app.firmware.commander import setpoint_t
 from crazyflie_app.firmware.logparam import LOG_FLOAT, LOG_UINT16, log_add, log_group
 from crazyflie_app.firmware.sil.stack import (CRASH_REASONS, SUPERVISOR_STATE_NAMES, WATCHDOG_STATES,
                                               FirmwarePlantConfig, FirmwareStack)
+from crazyflie_app.firmware.sil.tables import read_tables
 
 Console = Callable[[str, str], None]  # (module, text): the Crazyflie's DEBUG_PRINT
 
@@ -159,7 +160,8 @@ class FirmwareModel:
     m4 = property(lambda self: self.motor_pwm(3))
 
 
-# the firmware's own log groups a client looks for (pm.c, motors.c), read from the plant
+# stand-ins for log variables of firmware files this build does not compile (pm_stm32f4.c, motors.c), which
+# clients look for (cfclient's battery and motor gauges, cflib's basiclog example), read from the plant
 PM_LOG = log_group("pm", [log_add(LOG_FLOAT, "vbat", "battery_v", "V", "battery voltage")])
 MOTOR_LOG = log_group("motor", [log_add(LOG_UINT16, name, name, "", "motor %s ratio, 0-65535" % name.upper())
                                 for name in ("m1", "m2", "m3", "m4")])
@@ -175,7 +177,11 @@ class FirmwareFlightStack:
         self.commander = FirmwareCommander(self.stack, self.clock)
         self.supervisor = FirmwareSupervisor(self.stack, self.clock)
         self.model = FirmwareModel(self.stack)
-        self.log_groups = ((PM_LOG, self.model), (MOTOR_LOG, self.model))  # registered by the Crazyflie
+        # the firmware's own LOG/PARAM groups (every file compiled into the library), then the stand-ins
+        self.tables = read_tables(self.stack.lib, lambda: self.stack.tick)
+        self.log_groups = [(group, self.tables.owner) for group in self.tables.log_groups] + [
+            (PM_LOG, self.model), (MOTOR_LOG, self.model)]
+        self.param_groups = [(group, self.tables.owner) for group in self.tables.param_groups]
 
     def _on_tick(self, tick: int) -> None:
         self.supervisor.observe(tick)
@@ -186,4 +192,5 @@ class FirmwareFlightStack:
             yield freertos.v_task_delay(1)
 
     def close(self) -> None:
+        self.tables.owner.freeze()
         self.stack.close()
