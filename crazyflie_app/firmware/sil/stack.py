@@ -33,7 +33,7 @@ CONSOLE_BUFFER = 8192
 SUPERVISOR_STATE_NAMES = ("NOT_INITIALIZED", "PRE_FLIGHT_CHECKS_NOT_PASSED", PRE_FLIGHT, "ARMING", READY_TO_FLY,
                           FLYING, LANDED, "RESET", WARNING_LEVEL_OUT, "EXCEPTION_FREE_FALL", LOCKED, "CRASHED")
 WATCHDOG_STATES = (WARNING_LEVEL_OUT, "EXCEPTION_FREE_FALL", LOCKED, "CRASHED")
-CRASH_REASONS = {1: "tumbled (tilt past 90 deg)", 2: "hit the ground faster than 1 m/s"}
+CRASH_REASONS = {1: "tumbled (tilt past 90 deg)", 2: "hit the ground faster than 2.5 m/s (a fall from 0.32 m)"}
 
 
 class FirmwarePlantUnavailable(RuntimeError):
