@@ -131,6 +131,8 @@ class Crazyflie:
         self.commander = self.stack.commander
         self.supervisor = self.stack.supervisor
         self.model = self.stack.model
+        # the firmware's high-level commander (port 8, the trajectory memory): the firmware plant only
+        self.high_level = getattr(self.stack, "high_level", None)
         self.registry = LogParamRegistry()
         self.uart2 = None  # attach_uart2(url): the camera's wire on the deck port
         self.decks = _Decks(decks)

@@ -39,6 +39,9 @@ HOW_TO_GET = ("get the Crazyflie firmware (git clone https://github.com/bitcraze
 # the firmware's own C files, relative to its root
 FIRMWARE_SOURCES = (
     "src/modules/src/commander.c",
+    "src/modules/src/planner.c",
+    "src/modules/src/pptraj.c",
+    "src/modules/src/pptraj_compressed.c",
     "src/modules/src/supervisor_state_machine.c",
     "src/modules/src/kalman_supervisor.c",
     "src/modules/src/controller/controller_pid.c",
@@ -71,11 +74,14 @@ FIRMWARE_INCLUDES = (
     "src/utils/interface", "src/utils/interface/lighthouse", "build/include/generated", "src/config",
     "src/drivers/interface", "src/platform/interface", "src/deck/interface", "vendor/CMSIS/CMSIS/DSP/Include",
     "vendor/CMSIS/CMSIS/Core/Include", "vendor/FreeRTOS/include", "vendor/FreeRTOS/portable/GCC/ARM_CM4F",
-    "src/modules/src",  # sil_supervisor.c includes supervisor.c itself
+    "src/modules/src",  # sil_supervisor.c and sil_high_level.c include supervisor.c, crtp_commander_high_level.c
 )
+# firmware files our wrappers compile by #include (so the host reaches their statics): sil_supervisor.c,
+# sil_high_level.c
+INCLUDED_FIRMWARE_SOURCES = ("src/modules/src/supervisor.c", "src/modules/src/crtp_commander_high_level.c")
 # ours: the plant, the sensors, the loop and the shim (sil_supervisor.c compiles supervisor.c)
 OWN_SOURCES = ("sil_random.c", "sil_plant.c", "sil_sensors.c", "sil_firmware_shim.c", "sil_supervisor.c",
-               "sil_stabilizer.c")
+               "sil_high_level.c", "sil_stabilizer.c")
 # the firmware files whose FreeRTOS tasks sil_stabilizer.c rewrites as one loop: their LOG/PARAM groups and the
 # code that fills the variables only they log are taken from them verbatim at build time (LOOP_TABLES), so
 # the loop serves the firmware's own declarations, never a copy kept here

@@ -126,6 +126,31 @@ class FirmwareSupervisor:
         return self.stack.lib.sil_supervisor_info_bitfield()
 
 
+class FirmwareHighLevel:
+    """The firmware's high-level commander (crtp_commander_high_level.c, planner.c, pptraj.c): a client's
+    port-8 commands and its trajectory memory, acted on at the current tick (the stabilizer loop flies its
+    setpoints at COMMANDER_PRIORITY_HIGHLEVEL)."""
+
+    def __init__(self, stack: FirmwareStack, clock: FirmwareClock):
+        self.stack, self.clock = stack, clock
+
+    def command(self, payload: bytes) -> int:
+        """handleCommand(data[0], &data[1]) -> 0 or the errno the firmware answers with."""
+        self.clock.sync()
+        return self.stack.high_level_command(payload)
+
+    @property
+    def memory_size(self) -> int:
+        return self.stack.trajectory_memory_size()
+
+    def memory_write(self, address: int, data: bytes) -> bool:
+        self.clock.sync()
+        return self.stack.trajectory_memory_write(address, data)
+
+    def memory_read(self, address: int, length: int) -> bytes | None:
+        return self.stack.trajectory_memory_read(address, length)
+
+
 class FirmwareModel:
     """The plant's truth and the firmware's stateEstimate (both written by the C loop every tick)."""
 
@@ -177,6 +202,7 @@ class FirmwareFlightStack:
         self.commander = FirmwareCommander(self.stack, self.clock)
         self.supervisor = FirmwareSupervisor(self.stack, self.clock)
         self.model = FirmwareModel(self.stack)
+        self.high_level = FirmwareHighLevel(self.stack, self.clock)
         # the firmware's own LOG/PARAM groups (every file compiled into the library), then the stand-ins
         self.tables = read_tables(self.stack.lib, lambda: self.stack.tick)
         self.log_groups = [(group, self.tables.owner) for group in self.tables.log_groups] + [

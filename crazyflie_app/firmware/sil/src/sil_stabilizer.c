@@ -12,6 +12,7 @@
 #include "axis3fSubSampler.h"
 #include "commander.h"
 #include "controller.h"
+#include "crtp_commander_high_level.h"
 #define DEBUG_MODULE "STAB"
 #include "debug.h"
 #include "estimator.h"
@@ -56,6 +57,7 @@ static stabilizerStep_t stabilizerStep;
 static sensorData_t sensorData;
 static state_t state;
 static setpoint_t setpoint;
+static setpoint_t tempSetpoint;  /* the high-level commander's setpoint, before the commander takes it */
 static control_t control;
 static motors_thrust_uncapped_t motorThrustUncapped;
 static motors_thrust_uncapped_t motorThrustBatCompUncapped;
@@ -150,6 +152,10 @@ static void stabilizerStepOnce(void) {
   updateStateEstimatorAndControllerTypes();
   state = taskEstimatorState;  /* estimatorKalman(): the state the task externalized last */
   const bool canFly = supervisorCanFly();
+  crtpCommanderBlock(!canFly);
+  if (canFly && crtpCommanderHighLevelGetSetpoint(&tempSetpoint, &state, stabilizerStep)) {
+    commanderSetSetpoint(&tempSetpoint, COMMANDER_PRIORITY_HIGHLEVEL);
+  }
   commanderGetSetpoint(&setpoint, &state);
   if (!canFly) {
     memset(&setpoint, 0, sizeof(setpoint));

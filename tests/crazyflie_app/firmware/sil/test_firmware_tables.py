@@ -9,7 +9,7 @@ import pytest
 from crazyflie_app.firmware import COMMANDER_PRIORITY_EXTRX, Crazyflie, setpoint_t, v_task_delay
 from crazyflie_app.firmware.commander import modeAbs
 from crazyflie_app.firmware.sil import BUILD_DIR
-from crazyflie_app.firmware.sil.build import FIRMWARE_SOURCES, LOOP_FILES
+from crazyflie_app.firmware.sil.build import FIRMWARE_SOURCES, INCLUDED_FIRMWARE_SOURCES, LOOP_FILES
 from crazyflie_app.firmware.sil.stack import FirmwarePlantConfig
 
 from ..conftest import hover
@@ -45,8 +45,7 @@ def _firmware_root() -> Path:
 
 def _declared_groups(kind: str) -> set[str]:
     root = _firmware_root()
-    files = [root / f for f in FIRMWARE_SOURCES + LOOP_FILES if f.endswith(".c")] + [
-        root / "src/modules/src/supervisor.c"]  # compiled inside sil_supervisor.c
+    files = [root / f for f in FIRMWARE_SOURCES + LOOP_FILES + INCLUDED_FIRMWARE_SOURCES if f.endswith(".c")]
     return {name for path in files for name in re.findall(r"^\s*%s_GROUP_START\((\w+)\)" % kind,
                                                           path.read_text(), re.M)}
 
