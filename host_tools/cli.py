@@ -29,6 +29,7 @@ COMMANDS = {
     "evaluate": ("host_tools.detection.cmd_evaluate", "evaluate a detector model (crop and frame level)"),
     "split": ("host_tools.detection.cmd_split", "split annotated imagery by image into train and held-out CSVs"),
     "fly": ("host_tools.flight.cmd_fly", "fly a map with the Crazyflie app on the emulated firmware"),
+    "crazyflie": ("host_tools.flight.cmd_crazyflie", "serve idle emulated Crazyflies a client flies (cflib, swarms)"),
     "paper-tests": ("host_tools.flight.cmd_paper_tests", "run the paper's flight Tests 1-9"),
     "replay": ("host_tools.flight.cmd_replay", "replay a recorded clip through both halves"),
     "plantation": ("host_tools.cmd_plantation", "write a random plantation map (columns, gaps, look-alikes, ...)"),

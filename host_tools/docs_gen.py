@@ -113,10 +113,12 @@ def params_markdown() -> str:
     param_group, log_group = navigation.PARAM_TABLE, navigation.LOG_TABLE
     lines = ["# Flight app parameters and log variables", "", GENERATED_NOTE, "",
              "The Bolt app's PARAM table (`crazyflie_app/app/navigation.py`, `PARAM_TABLE`): each is `%s.<name>` "
-             "in a Crazyflie client, read and set in flight." % param_group.group, ""]
-    lines += _table(["param", "type", "default", "unit", "meaning"],
-                    [["`%s.%s`" % (param_group.group, e.name), e.type, getattr(defaults, e.attribute), e.unit,
-                      e.doc + (" (read-only)" if e.read_only else "")] for e in param_group.entries])
+             "in a Crazyflie client, read and set in flight. A write outside `valid` (or NaN) is refused: the "
+             "param keeps its value (docs/crtp.md)." % param_group.group, ""]
+    lines += _table(["param", "type", "default", "valid", "unit", "meaning"],
+                    [["`%s.%s`" % (param_group.group, e.name), e.type, getattr(defaults, e.attribute),
+                      "%g..%g" % e.valid, e.unit, e.doc + (" (read-only)" if e.read_only else "")]
+                     for e in param_group.entries])
     lines += ["", "## Log variables", "",
               "The LOG table (`LOG_TABLE`): each is `%s.<name>` in a log block and in the telemetry." % log_group.group,
               ""]

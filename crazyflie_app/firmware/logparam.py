@@ -13,6 +13,7 @@ Tables are declared like the C macros (``LOG_GROUP_START(app) LOG_ADD(LOG_FLOAT,
 
 where the third field names the attribute of the owning object (the C ``&variable``).
 """
+import math
 from collections.abc import Iterable
 from dataclasses import dataclass
 
@@ -44,6 +45,7 @@ class Entry:
     unit: str
     doc: str
     read_only: bool
+    valid: tuple | None = None  # (low, high): what the owner's write check (PARAM_ADD_WITH_CALLBACK) accepts
 
 
 @dataclass(frozen=True)
@@ -57,13 +59,19 @@ class FirmwareAssertError(AssertionError):
     """A failed firmware ASSERT (on the MAV: halt, LED pattern, 'assert failed' on the console)."""
 
 
+class ParamRangeError(ValueError):
+    """A write outside a param's ``valid`` range (or not a finite number): refused, the param keeps its value,
+    as an app's PARAM_ADD_WITH_CALLBACK check puts the old value back."""
+
+
 def log_add(var_type: str, name: str, attribute: str, unit: str = "", doc: str = "") -> Entry:
     return Entry(var_type, name, attribute, unit, doc, True)
 
 
 def param_add(var_type: str, name: str, attribute: str, unit: str = "", doc: str = "",
-              read_only: bool = False) -> Entry:
-    return Entry(var_type, name, attribute, unit, doc, read_only)
+              read_only: bool = False, valid: tuple | None = None) -> Entry:
+    """A PARAM_ADD line; ``valid=(low, high)`` makes writes outside it (and NaN) refused (ParamRangeError)."""
+    return Entry(var_type, name, attribute, unit, doc, read_only, valid)
 
 
 def log_group(group: str, entries: Iterable[Entry]) -> Group:
@@ -97,7 +105,17 @@ class _Variable:
             if not low <= value <= high:
                 raise FirmwareAssertError("param %s: %d out of range for %s" % (self.full_name, value,
                                                                                    self.entry.type))
+        self._check_valid(value)
         setattr(self.owner, self.entry.attribute, value)
+
+    def _check_valid(self, value: float | int) -> None:
+        valid = self.entry.valid
+        if valid is None:
+            return
+        low, high = valid
+        if not (math.isfinite(value) and low <= value <= high):
+            raise ParamRangeError("param %s: %r refused, valid %g..%g%s" % (
+                self.full_name, value, low, high, " " + self.entry.unit if self.entry.unit else ""))
 
 
 class LogParamRegistry:

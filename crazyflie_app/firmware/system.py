@@ -20,6 +20,7 @@ from crazyflie_app.firmware.reduced.mav_model import MavModelConfig
 from crazyflie_app.firmware.reduced.stack import ReducedFlightStack
 from crazyflie_app.firmware.sil.plant import FirmwareFlightStack
 from crazyflie_app.firmware.sil.stack import FirmwarePlantConfig
+from crazyflie_app.firmware.standins import STANDIN_PARAM_GROUPS, StandIns
 from crazyflie_app.firmware.supervisor import SUPERVISOR_STATES
 from crazyflie_app.firmware.uart2 import Uart2
 
@@ -130,14 +131,23 @@ class Crazyflie:
         self.commander = self.stack.commander
         self.supervisor = self.stack.supervisor
         self.model = self.stack.model
+        # the firmware's high-level commander (port 8, the trajectory memory): the firmware plant only
+        self.high_level = getattr(self.stack, "high_level", None)
         self.registry = LogParamRegistry()
         self.uart2 = None  # attach_uart2(url): the camera's wire on the deck port
         self.decks = _Decks(decks)
-        self.registry.register_log_group(STATE_ESTIMATE_LOG, self.model.estimate)
-        self.registry.register_log_group(SUPERVISOR_LOG, _SupervisorInfo(self.supervisor))
-        self.registry.register_param_group(DECK_PARAM, self.decks)
-        for group, owner in getattr(self.stack, "log_groups", ()):  # the firmware plant's pm and motor groups
+        if plant == "reduced":  # the firmware plant serves the firmware's own stateEstimate and supervisor
+            self.registry.register_log_group(STATE_ESTIMATE_LOG, self.model.estimate)
+            self.registry.register_log_group(SUPERVISOR_LOG, _SupervisorInfo(self.supervisor))
+        # the firmware plant: every LOG/PARAM group of the firmware files it compiles, and pm/motor stand-ins
+        for group, owner in getattr(self.stack, "log_groups", ()):
             self.registry.register_log_group(group, owner)
+        for group, owner in getattr(self.stack, "param_groups", ()):
+            self.registry.register_param_group(group, owner)
+        self.registry.register_param_group(DECK_PARAM, self.decks)
+        self.standins = StandIns()
+        for group in STANDIN_PARAM_GROUPS:
+            self.registry.register_param_group(group, self.standins)
         self.scheduler.x_task_create(self.stack.stabilizer_task(), "STABILIZER", STABILIZER_TASK_PRI)
 
     # -- firmware calls one service implements: FreeRTOS, commander, supervisor, UART2, log/param, console --

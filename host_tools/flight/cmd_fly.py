@@ -20,9 +20,9 @@ arming (docs/crtp.md). Lockstep without a client: the same summary and tlog byte
 
 Prints the flight summary (a short table, or the JSON object with --json) and writes flight.tlog (MAVLink 2),
 trajectory.png and summary.json into --out (default runs/fly-<map>-seed<N>/). Exit status 0 when the flight
-completed, 1 when it did not (crash (CRASHED: tumbled or hit the ground faster than 1 m/s), watchdog lock, time limit, camera never heard so never took off, camera
-link lost in flight, or a camera that reported no tree in a whole flight over a map with targets: it flew blind),
-2 on bad input.
+completed, 1 when it did not (crash (CRASHED: tumbled or hit the ground faster than 2.5 m/s), watchdog lock, time
+limit, camera never heard so never took off, camera link lost in flight, or a camera that reported no tree in a whole
+flight over a map with targets: it flew blind), 2 on bad input.
 
 Examples:
   foranav fly --map map1

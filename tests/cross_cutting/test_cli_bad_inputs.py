@@ -213,6 +213,14 @@ CASES = [
     # fly
     (FLY + ["--latency-ms", "70000"], "--latency-ms"),
     (["fly", "--map", "map1", "--fps", "0.01"], "--fps"),
+    # crazyflie (each refused before any drone starts)
+    (["crazyflie", "--count", "0"], "--count"),
+    (["crazyflie", "--count", "11"], "--count"),
+    (["crazyflie", "--crtp", "127.0.0.1:65535", "--count", "2"], "--crtp"),
+    (["crazyflie", "--crtp", "nope"], "--crtp"),
+    (["crazyflie", "--plant", "quantum"], "--plant"),
+    (["crazyflie", "--max-time-s", "nan"], "--max-time-s"),
+    (["crazyflie", "--map", "{in}/deep.json"], "deep.json"),
     (FLY + ["--seed", "-1"], "--seed"),
     (FLY + ["--hide-tree", "999"], "--hide-tree"),
     (FLY + ["--wind", "nan"], "--wind"),

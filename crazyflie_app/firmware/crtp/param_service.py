@@ -5,7 +5,8 @@
     ch 2  write  [id u16, value]   -> [id u16, value now]         unknown id: [id u16, PARAM_NOT_FOUND]
     ch 3  misc   [command, ...]:
           SETBYNAME          [0, group 0 name 0 type value] -> [0, group 0 name 0 status]
-                             (ENOENT unknown, EINVAL wrong type or size, EACCES read-only)
+                             (ENOENT unknown, EINVAL wrong type or size, EACCES read-only, ERANGE outside
+                             the param's valid range)
           GET_EXTENDED_TYPE  (v1 2, v2 7): no param of this emulation is extended (persistent), so
                              [2, id, PARAM_NOT_FOUND] and [7, id, ENOENT]
           PERSISTENT_STORE / _CLEAR (3 / 5): refused, [cmd, id, ENOENT]: there is no storage to keep them in
@@ -14,7 +15,8 @@
                              read-only params have none (PARAM_NOT_FOUND / ENOENT), as in the firmware
 
 A write goes through the registry's paramSet*, like any firmware write, and is echoed with the value the
-param holds afterwards. Two refusals the firmware does not make, so that a client never waits forever:
+param holds afterwards: a write outside an app param's valid range (PARAM table), or NaN, is refused there and
+the echo carries the value the param kept. Two refusals the firmware does not make, so that a client never waits forever:
 a write to a read-only param, or one whose value has the wrong size, is answered with the unchanged value.
 """
 import errno
@@ -24,7 +26,7 @@ from crazyflie_app.firmware.crtp.toc import (CMD_GET_INFO_V2, CMD_GET_ITEM_V2, T
                                              split_group_and_name)
 from crazyflie_app.firmware.crtp.values import (PARAM_RONLY, PARAM_TYPE_CODES, pack_param_value, param_size,
                                                 unpack_param_value)
-from crazyflie_app.firmware.logparam import PARAM_FLOAT, LogParamRegistry
+from crazyflie_app.firmware.logparam import PARAM_FLOAT, LogParamRegistry, ParamRangeError
 
 READ_CH, WRITE_CH, MISC_CH = 1, 2, 3
 MISC_SETBYNAME, MISC_VALUE_UPDATED, MISC_GET_EXTENDED_TYPE, MISC_PERSISTENT_STORE = 0, 1, 2, 3
@@ -109,7 +111,10 @@ class ParamService:
         if entry.read_only or len(raw) != param_size(entry.type):
             self.refused_writes += 1
         else:
-            self._set(entry, var_id, unpack_param_value(raw, entry.type))
+            try:
+                self._set(entry, var_id, unpack_param_value(raw, entry.type))
+            except ParamRangeError:  # outside the param's valid range: the echo carries the value it kept
+                self.refused_writes += 1
         return reply(packet, packet.data[:2] + self._value_bytes(index))
 
     def _set(self, entry, var_id, value: float | int) -> None:
@@ -166,5 +171,9 @@ class ParamService:
             return errno.EINVAL
         if entry.read_only:
             return errno.EACCES
-        self._set(entry, var_id, unpack_param_value(rest[1:], entry.type))
+        try:
+            self._set(entry, var_id, unpack_param_value(rest[1:], entry.type))
+        except ParamRangeError:
+            self.refused_writes += 1
+            return errno.ERANGE
         return 0

@@ -35,6 +35,7 @@ from crazyflie_app.firmware import freertos
 from crazyflie_app.firmware.crtp import link_service
 from crazyflie_app.firmware.crtp.commander_service import CommanderService
 from crazyflie_app.firmware.crtp.console_service import ConsoleService
+from crazyflie_app.firmware.crtp.high_level_service import HighLevelService
 from crazyflie_app.firmware.crtp.link import Address, DownlinkBudget, UdpLink
 from crazyflie_app.firmware.crtp.log_service import LogService
 from crazyflie_app.firmware.crtp.mem_service import MemService
@@ -55,7 +56,8 @@ HOLD_QUIET_S = 0.05  # a client's next request within this: still the same excha
 HOLD_BANK_S = 2.0
 HOLD_PER_SIM_S = 1.0
 MAX_DATAGRAMS_PER_BURST = 256  # read at a time; the rest waits in the socket (whose buffer bounds a flood)
-UNSERVED_PORTS = (CRTP_PORT_LOCALIZATION, CRTP_PORT_SETPOINT_HL)  # the firmware's, not this emulation's
+# the firmware's, not this emulation's (the high-level commander: the reduced plant has none)
+UNSERVED_PORTS = (CRTP_PORT_LOCALIZATION, CRTP_PORT_SETPOINT_HL)
 
 
 @dataclass
@@ -101,11 +103,15 @@ class CrtpServer:
         self.console = ConsoleService(cf.console)
         self._handlers = {
             CRTP_PORT_PARAM: self.param.handle, CRTP_PORT_LOG: self.log.handle,
-            CRTP_PORT_MEM: MemService(cf.registry).handle,
+            CRTP_PORT_MEM: MemService(cf.registry, cf.high_level).handle,
             CRTP_PORT_SETPOINT: self.commander.handle, CRTP_PORT_SETPOINT_GENERIC: self.commander.handle,
             CRTP_PORT_SUPERVISOR: SupervisorService(cf).handle, CRTP_PORT_PLATFORM: PlatformService(cf).handle,
             CRTP_PORT_LINK: link_service.handle,
         }
+        self.high_level = None
+        if cf.high_level is not None:  # the firmware plant runs the firmware's high-level commander
+            self.high_level = HighLevelService(cf.high_level)
+            self._handlers[CRTP_PORT_SETPOINT_HL] = self.high_level.handle
         self.client: Address | None = None
         self._last_heard = 0.0
         self._hold = _HoldBank()

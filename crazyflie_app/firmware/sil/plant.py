@@ -15,6 +15,7 @@ from crazyflie_app.firmware.commander import setpoint_t
 from crazyflie_app.firmware.logparam import LOG_FLOAT, LOG_UINT16, log_add, log_group
 from crazyflie_app.firmware.sil.stack import (CRASH_REASONS, SUPERVISOR_STATE_NAMES, WATCHDOG_STATES,
                                               FirmwarePlantConfig, FirmwareStack)
+from crazyflie_app.firmware.sil.tables import read_tables
 
 Console = Callable[[str, str], None]  # (module, text): the Crazyflie's DEBUG_PRINT
 
@@ -125,6 +126,31 @@ class FirmwareSupervisor:
         return self.stack.lib.sil_supervisor_info_bitfield()
 
 
+class FirmwareHighLevel:
+    """The firmware's high-level commander (crtp_commander_high_level.c, planner.c, pptraj.c): a client's
+    port-8 commands and its trajectory memory, acted on at the current tick (the stabilizer loop flies its
+    setpoints at COMMANDER_PRIORITY_HIGHLEVEL)."""
+
+    def __init__(self, stack: FirmwareStack, clock: FirmwareClock):
+        self.stack, self.clock = stack, clock
+
+    def command(self, payload: bytes) -> int:
+        """handleCommand(data[0], &data[1]) -> 0 or the errno the firmware answers with."""
+        self.clock.sync()
+        return self.stack.high_level_command(payload)
+
+    @property
+    def memory_size(self) -> int:
+        return self.stack.trajectory_memory_size()
+
+    def memory_write(self, address: int, data: bytes) -> bool:
+        self.clock.sync()
+        return self.stack.trajectory_memory_write(address, data)
+
+    def memory_read(self, address: int, length: int) -> bytes | None:
+        return self.stack.trajectory_memory_read(address, length)
+
+
 class FirmwareModel:
     """The plant's truth and the firmware's stateEstimate (both written by the C loop every tick)."""
 
@@ -159,7 +185,8 @@ class FirmwareModel:
     m4 = property(lambda self: self.motor_pwm(3))
 
 
-# the firmware's own log groups a client looks for (pm.c, motors.c), read from the plant
+# stand-ins for log variables of firmware files this build does not compile (pm_stm32f4.c, motors.c), which
+# clients look for (cfclient's battery and motor gauges, cflib's basiclog example), read from the plant
 PM_LOG = log_group("pm", [log_add(LOG_FLOAT, "vbat", "battery_v", "V", "battery voltage")])
 MOTOR_LOG = log_group("motor", [log_add(LOG_UINT16, name, name, "", "motor %s ratio, 0-65535" % name.upper())
                                 for name in ("m1", "m2", "m3", "m4")])
@@ -175,7 +202,12 @@ class FirmwareFlightStack:
         self.commander = FirmwareCommander(self.stack, self.clock)
         self.supervisor = FirmwareSupervisor(self.stack, self.clock)
         self.model = FirmwareModel(self.stack)
-        self.log_groups = ((PM_LOG, self.model), (MOTOR_LOG, self.model))  # registered by the Crazyflie
+        self.high_level = FirmwareHighLevel(self.stack, self.clock)
+        # the firmware's own LOG/PARAM groups (every file compiled into the library), then the stand-ins
+        self.tables = read_tables(self.stack.lib, lambda: self.stack.tick)
+        self.log_groups = [(group, self.tables.owner) for group in self.tables.log_groups] + [
+            (PM_LOG, self.model), (MOTOR_LOG, self.model)]
+        self.param_groups = [(group, self.tables.owner) for group in self.tables.param_groups]
 
     def _on_tick(self, tick: int) -> None:
         self.supervisor.observe(tick)
@@ -186,4 +218,5 @@ class FirmwareFlightStack:
             yield freertos.v_task_delay(1)
 
     def close(self) -> None:
+        self.tables.owner.freeze()
         self.stack.close()

@@ -33,7 +33,7 @@ CONSOLE_BUFFER = 8192
 SUPERVISOR_STATE_NAMES = ("NOT_INITIALIZED", "PRE_FLIGHT_CHECKS_NOT_PASSED", PRE_FLIGHT, "ARMING", READY_TO_FLY,
                           FLYING, LANDED, "RESET", WARNING_LEVEL_OUT, "EXCEPTION_FREE_FALL", LOCKED, "CRASHED")
 WATCHDOG_STATES = (WARNING_LEVEL_OUT, "EXCEPTION_FREE_FALL", LOCKED, "CRASHED")
-CRASH_REASONS = {1: "tumbled (tilt past 90 deg)", 2: "hit the ground faster than 1 m/s"}
+CRASH_REASONS = {1: "tumbled (tilt past 90 deg)", 2: "hit the ground faster than 2.5 m/s (a fall from 0.32 m)"}
 
 
 class FirmwarePlantUnavailable(RuntimeError):
@@ -156,6 +156,10 @@ def _declare(lib: ctypes.CDLL) -> None:
     lib.sil_supervisor_state_name.argtypes = [ctypes.c_int]
     lib.sil_supervisor_state_name.restype = ctypes.c_char_p
     lib.sil_console_read.argtypes = [ctypes.c_char_p, ctypes.c_int]
+    lib.sil_high_level_command.argtypes = [ctypes.c_char_p, ctypes.c_int]
+    lib.sil_trajectory_memory_size.restype = _U
+    lib.sil_trajectory_memory_write.argtypes = [_U, ctypes.c_char_p, ctypes.c_int]
+    lib.sil_trajectory_memory_read.argtypes = [_U, ctypes.c_char_p, ctypes.c_int]
 
 
 def library_path() -> str:
@@ -265,6 +269,23 @@ class FirmwareStack:
             module, sep, rest = line.partition(": ")
             out.append((module, rest) if sep and module.isupper() else ("FW", line))
         return out
+
+    def high_level_command(self, payload: bytes) -> int:
+        """A port-8 packet's data to the firmware's high-level commander -> its answer (0, or an errno)."""
+        return self.lib.sil_high_level_command(bytes(payload), len(payload))
+
+    def trajectory_memory_size(self) -> int:
+        return self.lib.sil_trajectory_memory_size()
+
+    def trajectory_memory_write(self, address: int, data: bytes) -> bool:
+        """The firmware's trajectory memory handler: False when the write would end past the memory."""
+        return bool(self.lib.sil_trajectory_memory_write(address & 0xFFFFFFFF, bytes(data), len(data)))
+
+    def trajectory_memory_read(self, address: int, length: int) -> bytes | None:
+        buffer = ctypes.create_string_buffer(max(1, length))
+        if not self.lib.sil_trajectory_memory_read(address & 0xFFFFFFFF, buffer, length):
+            return None
+        return buffer.raw[:length]
 
     def close(self) -> None:
         """Unload this stack's copy of the library (its outputs stay readable: they are Python's memory)."""

@@ -1,17 +1,50 @@
-"""A client may write any value into an app PARAM (cfclient over --crtp): nonsense gives a wrong flight, never
-a crash of either app."""
+"""A client may write any value into an app PARAM (cfclient or cflib over --crtp, a flight option): a write
+outside the PARAM table's valid range, or NaN, is refused and the param keeps its value, so a slip never flies
+the mission blind (a zero camera width) or stalls it (a NaN speed). Over CRTP: tests/crazyflie_app/firmware/
+crtp/test_app_param_checks.py."""
+import math
+
 import pytest
 
+from crazyflie_app.app.navigation import PARAM_TABLE
+from crazyflie_app.firmware import Crazyflie
+from crazyflie_app.firmware.logparam import ParamRangeError
+from host_tools.errors import ForaNavError
 from host_tools.flight import OracleCamera, run_flight
+from host_tools.flight.registry import app_factory
 from host_tools.maps import load_map
+
+PATH = [(0.0, 0.0), (2.0, 0.0)]
 
 
 @pytest.mark.parametrize("app", ["python", "c"])
-def test_that_zero_camera_geometry_gives_a_wrong_flight_not_a_crash(app):
-    # Fixture: app.camScale and app.camWidth written as 0 (a slip in cfclient's Parameters tab)
+@pytest.mark.parametrize("name, value", [("app.camWidth", 0), ("app.camScale", 0.0), ("app.cruiseSpeed", math.nan),
+                                         ("app.altitude", math.inf), ("app.frameCap", 0)])
+def test_that_a_write_outside_the_valid_range_is_refused_and_the_value_kept(app, name, value):
+    # Fixture
+    cf = Crazyflie(seed=0)
+    cf.attach_uart2("loop://")
+    app_factory(app)(cf, PATH, "oil_palm")
+    before = cf.registry.param_read(name)
+    # Test / Assert: refused, named, the param unchanged
+    with pytest.raises(ParamRangeError, match=name.replace(".", r"\.")):
+        cf.registry.param_set(name, value)
+    assert cf.registry.param_read(name) == before
+    cf.close()
+
+
+def test_that_every_app_param_has_a_valid_range_holding_its_default():
+    cf = Crazyflie(seed=0)
+    cf.attach_uart2("loop://")
+    app_factory("python")(cf, PATH, "oil_palm")
+    for entry in PARAM_TABLE.entries:
+        low, high = entry.valid
+        assert low <= cf.registry.param_read("app." + entry.name) <= high, entry.name
+    cf.close()
+
+
+def test_that_a_flight_option_outside_the_range_is_a_user_error_naming_it():
     pmap = load_map("map1")
-    options = {"app": app, "max_time_s": 40.0, "params": {"app.camScale": 0.0, "app.camWidth": 0}}
-    # Test
-    summary = run_flight(pmap, OracleCamera(pmap, seed=0), seed=0, options=options)
-    # Assert: the flight ran to its time limit (no ZeroDivisionError in the app, no inf in the C core's setpoints)
-    assert summary["mission_time_s"] > 30 and summary["watchdog_events"] == 0
+    options = {"max_time_s": 5.0, "params": {"app.camWidth": 0}}
+    with pytest.raises(ForaNavError, match=r"params: param app\.camWidth: 0 refused, valid 16\.\.4096 px"):
+        run_flight(pmap, OracleCamera(pmap, seed=0), seed=0, options=options)

@@ -1,8 +1,9 @@
 /* The thin shim between the firmware's own C files (commander.c, supervisor.c, the controller, the Kalman
  * core, power distribution) and the host: the FreeRTOS calls they make (the tick count and the 1-deep
  * queues of commander.c), the motor driver (the plant's motors), the console (DEBUG_PRINT lines are kept
- * for the host to read), and the services that are not flown here (the high-level commander, the CRTP
- * emergency stop, deck faults), each answering as a firmware without them would. */
+ * for the host to read), what the high-level commander needs of FreeRTOS, CRTP and the memory subsystem, and
+ * the services that are not flown here (the CRTP emergency stop, deck faults), each answering as a firmware
+ * without them would. */
 #include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
@@ -11,8 +12,10 @@
 #include "queue.h"
 #include "task.h"
 
+#include "crtp.h"
 #include "crtp_commander.h"
 #include "crtp_commander_high_level.h"
+#include "mem.h"
 #include "crtp_supervisor.h"
 #include "deck_supervisor.h"
 #include "motors.h"
@@ -60,7 +63,9 @@ BaseType_t xQueueGenericSend(QueueHandle_t xQueue, const void *const pvItemToQue
   (void)xTicksToWait;
   (void)xCopyPosition;
   HostQueue *queue = (HostQueue *)xQueue;
-  memcpy(queue->storage, pvItemToQueue, queue->itemSize);
+  if (queue->itemSize > 0) {  /* a mutex (the high-level commander's lock) has no item */
+    memcpy(queue->storage, pvItemToQueue, queue->itemSize);
+  }
   return pdTRUE;
 }
 
@@ -144,14 +149,56 @@ int silShimAssertFailures(void) { return assertFailures; }
 
 int silShimConsolePending(void) { return consoleLength; }
 
+/* -- what the high-level commander (sil_high_level.c) asks of FreeRTOS, CRTP, the memory subsystem ------ */
+
+/* Its CRTP task is never created: the host hands it packets (sil_high_level_command). */
+TaskHandle_t xTaskCreateStatic(TaskFunction_t pxTaskCode, const char *const pcName, const uint32_t ulStackDepth,
+                               void *const pvParameters, UBaseType_t uxPriority, StackType_t *const puxStackBuffer,
+                               StaticTask_t *const pxTaskBuffer) {
+  (void)pxTaskCode;
+  (void)pcName;
+  (void)ulStackDepth;
+  (void)pvParameters;
+  (void)uxPriority;
+  (void)puxStackBuffer;
+  return (TaskHandle_t)pxTaskBuffer;
+}
+
+void crtpInitTaskQueue(CRTPPort taskPort) { (void)taskPort; }
+int crtpReceivePacketBlock(CRTPPort taskPort, CRTPPacket *p) {
+  (void)taskPort;
+  (void)p;
+  return -1;
+}
+int crtpSendPacketBlock(CRTPPacket *p) {
+  (void)p;
+  return 0;
+}
+
+/* One loop, no preemption: its trajectory lock is never contended. */
+QueueHandle_t xQueueCreateMutexStatic(const uint8_t ucQueueType, StaticQueue_t *pxStaticQueue) {
+  (void)ucQueueType;
+  HostQueue *queue = (HostQueue *)pxStaticQueue;
+  queue->storage = NULL;
+  queue->itemSize = 0;
+  return (QueueHandle_t)queue;
+}
+
+BaseType_t xQueueSemaphoreTake(QueueHandle_t xQueue, TickType_t xTicksToWait) {
+  (void)xQueue;
+  (void)xTicksToWait;
+  return pdTRUE;
+}
+
+/* The planner's clock: the tick in microseconds (usec_time.h). */
+uint64_t usecTimestamp(void) { return (uint64_t)tickCount * 1000u; }
+
+/* mem.c's registry: the trajectory memory's handler is the one sil_high_level.c reaches directly. */
+void memoryRegisterHandler(const MemoryHandlerDef_t *handlerDef) { (void)handlerDef; }
+
 /* -- services not flown here --------------------------------------------------------------------------- */
 
 void crtpCommanderInit(void) {}
-void crtpCommanderHighLevelInit(void) {}
-int crtpCommanderHighLevelStop(void) { return 0; }
-void crtpCommanderHighLevelTellState(const state_t *state) { (void)state; }
-bool crtpCommanderHighLevelIsTrajectoryFinished(void) { return true; }
-enum trajectory_state crtpCommanderHighLevelGetPlannerState(void) { return TRAJECTORY_STATE_IDLE; }
 bool crtpSupervisorIsEmergencyStopRequested(void) { return false; }
 uint32_t crtpSupervisorGetEmergencyStopWatchdogNotificationTick(void) { return 0; }
 bool deckSupervisorHasFault(void) { return false; }

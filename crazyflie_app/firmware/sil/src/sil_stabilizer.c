@@ -11,15 +11,25 @@
 
 #include "axis3fSubSampler.h"
 #include "commander.h"
+#include "controller.h"
+#include "crtp_commander_high_level.h"
+#define DEBUG_MODULE "STAB"
+#include "debug.h"
+#include "estimator.h"
 #include "controller_pid.h"
 #include "kalman_core.h"
 #include "kalman_supervisor.h"
+#include "log.h"
 #include "mm_distance.h"
 #include "mm_flow.h"
 #include "mm_tof.h"
 #include "motors.h"
+#include "outlierFilterLighthouse.h"
+#include "param.h"
 #include "physicalConstants.h"
 #include "power_distribution.h"
+#include "quatcompress.h"
+#include "statsCnt.h"
 #include "stabilizer_types.h"
 #include "supervisor.h"
 #include "supervisor_state_machine.h"
@@ -30,7 +40,8 @@
 #include "sil_shim.h"
 
 #define TICK_S 0.001
-#define PREDICTION_UPDATE_INTERVAL_MS 10  /* estimator_kalman.c: 1000 / PREDICT_RATE */
+#define PREDICTION_UPDATE_INTERVAL_MS 10
+#define ONE_SECOND 1000  /* estimator_kalman.c: its rate counters' averaging interval */  /* estimator_kalman.c: 1000 / PREDICT_RATE */
 
 static sil_config_t config;
 static sil_body_t body;
@@ -46,11 +57,18 @@ static stabilizerStep_t stabilizerStep;
 static sensorData_t sensorData;
 static state_t state;
 static setpoint_t setpoint;
+static setpoint_t tempSetpoint;  /* the high-level commander's setpoint, before the commander takes it */
 static control_t control;
 static motors_thrust_uncapped_t motorThrustUncapped;
 static motors_thrust_uncapped_t motorThrustBatCompUncapped;
 static motors_thrust_pwm_t motorPwm;
 static float supplyVoltage;
+static StateEstimatorType estimatorType;  /* stabilizer.estimator: what runs (the emulation has Kalman only) */
+static ControllerType controllerType;     /* stabilizer.controller: what runs (the emulation has PID only) */
+static STATS_CNT_RATE_DEFINE(stabilizerRate, 500);
+static uint32_t inToOutLatency;           /* the loop has no sensor interrupt to measure from: 0 */
+static void compressState(void);          /* stabilizer.c's, in sil_loop_tables.inc */
+static void compressSetpoint(void);
 
 /* estimator_kalman.c */
 static kalmanCoreData_t coreData;
@@ -61,7 +79,13 @@ static Axis3f accLatest;
 static Axis3f gyroLatest;
 static state_t taskEstimatorState;
 static uint32_t nextPredictionMs;
-static bool resetEstimation;
+bool resetEstimation;  /* kalman.resetEstimation: the next Kalman step re-initialises the filter */
+static bool robustTwr;
+static bool robustTdoa;
+static OutlierFilterLhState_t sweepOutlierFilterState;  /* no Lighthouse deck here: logged as the firmware's */
+static STATS_CNT_RATE_DEFINE(updateCounter, ONE_SECOND);
+static STATS_CNT_RATE_DEFINE(predictionCounter, ONE_SECOND);
+static STATS_CNT_RATE_DEFINE(finalizeCounter, ONE_SECOND);
 
 /* this tick's measurements, in the order the drivers queued them */
 static flowMeasurement_t flowQueued;
@@ -106,9 +130,32 @@ static void controlMotors(void) {
   }
 }
 
+/* stabilizer.c updateStateEstimatorAndControllerTypes(), for the one estimator and one controller compiled
+ * here: a client asking for another one is told so on the console and the variable reads what runs, as the
+ * firmware's does after stateEstimatorSwitchTo() / controllerInit() */
+static void updateStateEstimatorAndControllerTypes(void) {
+  if (estimatorType != StateEstimatorTypeKalman) {
+    DEBUG_PRINT("estimator %d is not in the emulated firmware: the Kalman filter (2) runs\n", (int)estimatorType);
+    estimatorType = StateEstimatorTypeKalman;
+  }
+  if (controllerType != ControllerTypePID) {
+    if (controllerType == ControllerTypeAutoSelect) {
+      controllerPidInit();  /* auto selects the PID controller, re-initialised as controllerInit() does */
+    } else {
+      DEBUG_PRINT("controller %d is not in the emulated firmware: the PID controller (1) runs\n", (int)controllerType);
+    }
+    controllerType = ControllerTypePID;
+  }
+}
+
 static void stabilizerStepOnce(void) {
+  updateStateEstimatorAndControllerTypes();
   state = taskEstimatorState;  /* estimatorKalman(): the state the task externalized last */
   const bool canFly = supervisorCanFly();
+  crtpCommanderBlock(!canFly);
+  if (canFly && crtpCommanderHighLevelGetSetpoint(&tempSetpoint, &state, stabilizerStep)) {
+    commanderSetSetpoint(&tempSetpoint, COMMANDER_PRIORITY_HIGHLEVEL);
+  }
   commanderGetSetpoint(&setpoint, &state);
   if (!canFly) {
     memset(&setpoint, 0, sizeof(setpoint));
@@ -121,7 +168,10 @@ static void stabilizerStepOnce(void) {
   } else {
     motorsStop();
   }
+  compressState();
+  compressSetpoint();
   stabilizerStep++;
+  STATS_CNT_RATE_EVENT(&stabilizerRate);
 }
 
 static void kalmanTaskOnce(uint32_t nowMs) {
@@ -136,6 +186,7 @@ static void kalmanTaskOnce(uint32_t nowMs) {
     kalmanCorePredict(&coreData, &coreParams, &accSubSampler.subSample, &gyroSubSampler.subSample, nowMs,
                       quadIsFlying);
     nextPredictionMs = nowMs + PREDICTION_UPDATE_INTERVAL_MS;
+    STATS_CNT_RATE_EVENT(&predictionCounter);
   }
   kalmanCoreAddProcessNoise(&coreData, &coreParams, nowMs);
   if (distancePending) {
@@ -150,12 +201,15 @@ static void kalmanTaskOnce(uint32_t nowMs) {
     kalmanCoreUpdateWithFlow(&coreData, &flowQueued, &gyroLatest);
     statusOut->flow_updates++;
   }
-  kalmanCoreFinalize(&coreData);
+  if (kalmanCoreFinalize(&coreData)) {
+    STATS_CNT_RATE_EVENT(&finalizeCounter);
+  }
   if (!kalmanSupervisorIsStateWithinBounds(&coreData)) {
     resetEstimation = true;
     statusOut->estimator_resets++;
   }
   kalmanCoreExternalizeState(&coreData, &taskEstimatorState, &accLatest);
+  STATS_CNT_RATE_EVENT(&updateCounter);
 }
 
 static void publish(uint32_t tick) {
@@ -202,6 +256,11 @@ static void runTick(uint32_t tick) {
   publish(tick);
 }
 
+/* The LOG/PARAM groups of stabilizer.c and estimator_kalman.c, and the compression code their
+ * stateEstimateZ / ctrltargetZ groups log, generated from the firmware source by build.py: they name this
+ * loop's variables, which carry the firmware's names. */
+#include "sil_loop_tables.inc"
+
 /* -- the host interface (sil_api.h) -------------------------------------------------------------------- */
 
 int sil_api_version(void) { return SIL_API_VERSION; }
@@ -228,6 +287,9 @@ int sil_boot(const sil_config_t *c, sil_state_t *truth, sil_state_t *estimate, s
   coreParams.initialY = (float)config.start[1];
   coreParams.initialZ = (float)config.start[2];
   coreParams.initialYaw = (float)(config.start_yaw_deg * DEG_TO_RAD);
+  estimatorType = StateEstimatorTypeKalman;  /* the Flow deck requires it (estimator selection at boot) */
+  controllerType = ControllerTypePID;
+  resetEstimation = false;
   estimatorKalmanInit(0);
   kalmanCoreExternalizeState(&coreData, &taskEstimatorState, &accLatest);
   state = taskEstimatorState;

@@ -6,6 +6,7 @@ import math
 import pytest
 
 from crazyflie_app.firmware import Crazyflie, setpoint_t, COMMANDER_PRIORITY_EXTRX, v_task_delay
+from crazyflie_app.firmware.commander import modeAbs
 from crazyflie_app.firmware.sil.stack import FirmwarePlantConfig
 from crazyflie_app.firmware.supervisor import FLYING, LOCKED, PRE_FLIGHT, READY_TO_FLY, WARNING_LEVEL_OUT
 
@@ -115,12 +116,23 @@ def landing(ramp):
     return setpoint_at
 
 
-def test_that_cutting_the_motors_at_the_last_landing_height_is_a_crash():
+def test_that_cutting_the_motors_at_the_last_landing_height_is_a_landing():
     # Fixture
     cf = firmware_cf()
-    # Test: Navigation.c's landing: the motors stop at 0.15 m
+    # Test: Navigation.c's landing (and cflib's MotionCommander's): the motors stop a few cm up, here 0.15 m
     pilot(cf, 11000, landing(ramp=False))
-    # Assert: the MAV falls 0.15 m and hits the ground at ~1.7 m/s, past the 1 m/s the crash rule allows
+    # Assert: the MAV falls 0.15 m and hits the ground at ~1.7 m/s: a Crazyflie lands like that every day
+    assert not cf.model.crashed
+    assert cf.model.truth.z == 0.0
+    cf.close()
+
+
+def test_that_cutting_the_motors_at_a_metre_is_a_crash():
+    # Fixture
+    cf = firmware_cf()
+    # Test: hover at 1 m, then motors off
+    pilot(cf, 8000, lambda t: hover if t < 6000 else (lambda sp: (sp.memset_zero(), sp)[1]))
+    # Assert: a 1 m fall hits the ground at ~4.4 m/s, past the 2.5 m/s (0.32 m fall) the crash rule allows
     assert cf.model.crashed
     assert "ground" in cf.model.crash_reason
     cf.close()
@@ -214,4 +226,22 @@ def test_that_the_battery_and_motors_are_logged_as_on_a_crazyflie():
     motors = [cf.log_get_uint(cf.log_get_var_id("motor", "m%d" % i)) for i in range(1, 5)]
     assert 7.0 < vbat < FirmwarePlantConfig().battery_full_v
     assert all(25000 < m < 45000 for m in motors)
+    cf.close()
+
+
+def test_that_a_flip_is_a_crash():
+    # Fixture
+    cf = firmware_cf()
+
+    def flip(sp):
+        sp.memset_zero()
+        sp.mode.roll = sp.mode.pitch = sp.mode.yaw = modeAbs  # attitude setpoint, thrust by hand
+        sp.attitude.roll = 150.0
+        sp.thrust = 40000
+        return sp
+    # Test: hover at 1 m, then ask for a 150 degree roll
+    pilot(cf, 7000, lambda t: hover if t < 6000 else flip)
+    # Assert: past 90 degrees of tilt the MAV has tumbled, a crash whatever its speed
+    assert cf.model.crashed
+    assert "tumbled" in cf.model.crash_reason
     cf.close()
