@@ -1,6 +1,4 @@
 """The opt-in period-tied peak stage (foranav_period, grouping.group_by_centre, DetectorSettings.grouping)."""
-import math
-
 import numpy as np
 import pytest
 
@@ -9,13 +7,12 @@ import foranav_detector as detector_core
 import foranav_features as features
 import foranav_model
 import foranav_period as period
-from host_tools.detection import synthetic
+from host_tools.detection import period_pairs, synthetic
 from host_tools.jevois_host import ModuleRunner
 from tests.conftest import REPO_ROOT
 
 SHIPPED_MODEL = REPO_ROOT / "jevois_module" / "ForaNavTrees" / "foranav_oil_palm.npz"
 PERIOD_TOLERANCE = 0.05  # of the true period, on a synthetic grid of crowns
-MATCH_CROWN = 0.5  # a detection within half a crown of a crown's centre is that crown
 
 
 def _grid_frame(spacing, crown_share, seed=0, height=288, width=352):
@@ -44,21 +41,13 @@ def test_that_a_frame_without_a_repeat_has_no_period():
 
 
 def _small_beside_large():
-    """A 66 px crown touching a 102 px one (centres 73 px apart, a little closer than touching), the bench's
-    'small' case on synthetic palms: (frame, [(x, y, crown) of the two]). Seed 0 of the search over such
-    frames in docs/detector.md."""
-    rng = np.random.RandomState(0)
-    image = synthetic.ground(rng, 288, 352)
-    small, large = float(rng.uniform(65, 80)), float(rng.uniform(100, 125))
-    distance = (small + large) / 2.0 * float(rng.uniform(0.85, 1.0))
-    crowns = [(176 - distance / 2.0, 144.0, small), (176 + distance / 2.0, 144.0, large)]
-    synthetic.draw_palm(image, rng, crowns[1][0], 144, large)
-    synthetic.draw_palm(image, rng, crowns[0][0], 144, small)
-    return image, crowns, distance
+    """A 66 px crown touching a 102 px one (centres 73 px apart), the bench's 'small' case on synthetic palms:
+    seed 0 of host_tools.detection.period_pairs."""
+    return period_pairs.pair_frame(0)
 
 
 def _found(detections, crowns):
-    return [any(math.hypot(d.x - x, d.y - y) <= MATCH_CROWN * crown for d in detections) for x, y, crown in crowns]
+    return period_pairs.found(detections, crowns)
 
 
 def test_that_the_period_stage_keeps_a_small_crown_touching_a_larger_one_apart():
