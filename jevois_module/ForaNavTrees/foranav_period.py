@@ -6,14 +6,14 @@
 # suppression of the period stage (foranav_grouping.group_by_centre) uses a radius tied to it, not to the
 # window or crown size (Srestasathiern & Rakwatin 2014: the window from the semi-variogram).
 #
-# Cost: one resize, one Hann product, two DFTs at about 88 x 72 (a few whole-image operations), and a radial
+# Cost: one resize, one Hann product, three DFTs at about 116 x 96 (58 x 48 zero-padded), and a radial
 # maximum through one precomputed ordering (cached per frame shape). No per-pixel Python.
 import math
 
 import cv2
 import numpy as np
 
-ANALYSIS_SIDE = 48  # the shorter side of the low-resolution copy, in pixels (crowns of 65 px -> 13 px)
+ANALYSIS_SIDE = 48  # the low-resolution copy's shorter side, at least (288 px frames: 1/6; a 65 px crown: 11 px)
 MIN_PROMINENCE = 0.08  # the peak must rise this far (autocorrelation, 1 = zero lag) above the dip before it
 MIN_PEAK = 0.15  # ... and reach this value: a weaker repeat is texture, not a grid
 HARMONIC_SHARE = 0.5  # the nearest peak within this share of the strongest is the period, not a multiple
