@@ -10,7 +10,7 @@ detector: ms per frame and FPS of the tree detector at 352x288, 640x480 and 1280
 sweep:    flights per CPU-second and the 1 -> 2 Dask worker speed-up (--camera sim|oracle, --count N).
 recall:   how often the camera module sees the crown under the MAV from straight above: isolated, touching
           one or two neighbours, small beside a larger one, centred and off-centre (--model, --count frames
-          per case, --seed).
+          per case, --seed, --grouping nms|period, --period auto|map).
 crtp:     datagrams per second the CRTP server handles (dispatch alone, and over UDP from another process),
           and the CPU and wall seconds of the Map 1 oracle flight without --crtp, with it, and with stock cflib
           streaming a 100 Hz log block.
@@ -22,6 +22,7 @@ from host_tools import argtypes
 from host_tools.errors import ForaNavError
 from crazyflie_app.firmware.system import PLANTS
 from host_tools.sim.cli_args import add_appearance_arguments
+from jevois_module.ForaNavTrees.foranav_detector import GROUPINGS
 
 TARGETS = {
     "sim": "host_tools.sim.bench",
@@ -43,6 +44,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         help="sweep: flights per worker count (default 6); recall: frames per case (default 150)")
     parser.add_argument("--model", default=None,
                         help="detector, recall: model file, or a shipped species (default: the shipped oil palm model)")
+    parser.add_argument("--grouping", choices=GROUPINGS, default=None,
+                        help="recall and detector: the detector's grouping of peaks into trees (default nms, "
+                        "today's; period: the period-tied peak stage)")
+    parser.add_argument("--period", choices=("auto", "map"), default=None,
+                        help="recall with --grouping period: the period from each frame (auto, default) or the "
+                        "scene's neighbour spacing in pixels sent to the module (map)")
     add_appearance_arguments(parser)  # bench sim and recall: --crowns / --ground
     parser.add_argument("--plant", choices=PLANTS, default=None,
                         help="flight: also fly the firmware plant (beside the reduced plant)")

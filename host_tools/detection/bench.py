@@ -6,7 +6,8 @@ the camera's lens does): median and p90 milliseconds per frame and frames per se
 implementation of the same pipeline timed on the same frame(s), their ratio, and the peak resident memory.
 The process is pinned to one CPU and OpenCV/BLAS are limited to one thread. Then the estimated JeVois-A33 rate:
 the median CPU time per frame times A33_FACTOR (docs/hardware.md), for the shipped flight model and for the
-shipped model with a network (foranav_oil_palm_cnn.npz) at 352x288.
+shipped model with a network (foranav_oil_palm_cnn.npz) at 352x288. ``--grouping period``: the same with the
+period-tied peak stage on (the period estimated from each frame).
 """
 import argparse
 import json
@@ -81,21 +82,22 @@ def time_reference(detector: Any, frames: Sequence[np.ndarray], count: int) -> n
 
 
 def measure(seed: int = 0, model_name: str = "oil_palm", sizes: Sequence[tuple[int, int]] = SIZES,
-            fast_frames: int | None = None, reference_frames: int = REFERENCE_FRAMES) -> dict:
+            fast_frames: int | None = None, reference_frames: int = REFERENCE_FRAMES, grouping: str = "nms") -> dict:
     previous = pin_to_one_core()
     try:
-        return _measure(seed, model_name, sizes, fast_frames, reference_frames, previous is not None)
+        return _measure(seed, model_name, sizes, fast_frames, reference_frames, previous is not None,
+                        detector_core.DetectorSettings(grouping=grouping))
     finally:
         if previous is not None:
             os.sched_setaffinity(0, previous)
 
 
-def _measure(seed, model_name, sizes, fast_frames, reference_frames, pinned):
+def _measure(seed, model_name, sizes, fast_frames, reference_frames, pinned, settings):
     single_threaded()
     model = common.load(model_name)
     results = {}
     for width, height in sizes:
-        detector = detector_core.TreeDetector(model)
+        detector = detector_core.TreeDetector(model, settings)
         frames = frames_for(width, height, seed)
         fast, cpu = time_fast(detector, frames, (fast_frames or FAST_FRAMES).get(width, 40))
         slow = time_reference(detector, frames, reference_frames)
@@ -106,22 +108,23 @@ def _measure(seed, model_name, sizes, fast_frames, reference_frames, pinned):
             "speedup_vs_reference": round(float(np.median(slow)) / median, 1),
             "windows": [round(w) for w in detector.window_sizes(width)],
             "cpu_median_ms": round(float(np.median(cpu)), 3)}, **a33_estimate(float(np.median(cpu))))
-    network = detector_core.TreeDetector(common.load(os.path.join(DEFAULT_MODULE_DIR, NETWORK_MODEL)))
+    network = detector_core.TreeDetector(common.load(os.path.join(DEFAULT_MODULE_DIR, NETWORK_MODEL)), settings)
     _fast, cpu = time_fast(network, frames_for(352, 288, seed), (fast_frames or FAST_FRAMES).get(352, 40))
     results["352x288 with network"] = dict({"cpu_median_ms": round(float(np.median(cpu)), 3)},
                                            **a33_estimate(float(np.median(cpu))))
     peak_kb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss  # kilobytes on Linux
     return {"sizes": results, "peak_rss_mb": round(peak_kb / 1024.0, 1), "one_core": pinned,
-            "model": common.model_path(model_name), "a33_factor": A33_FACTOR}
+            "model": common.model_path(model_name), "a33_factor": A33_FACTOR, "grouping": settings.grouping}
 
 
 def run(args: argparse.Namespace) -> int:
-    result = measure(seed=args.seed, model_name=getattr(args, "model", None) or "oil_palm")
+    result = measure(seed=args.seed, model_name=getattr(args, "model", None) or "oil_palm",
+                     grouping=getattr(args, "grouping", None) or "nms")
     if getattr(args, "json", False):
         print(json.dumps(result))
         return 0
-    print("tree detector, one core (%s), model %s" % ("pinned" if result["one_core"] else "not pinned",
-                                                     result["model"]))
+    print("tree detector, one core (%s), model %s, grouping %s" % (
+        "pinned" if result["one_core"] else "not pinned", result["model"], result["grouping"]))
     print("%-10s %9s %9s %8s %13s %9s  %s" % ("frame", "median ms", "p90 ms", "fps", "reference ms", "speed-up",
                                               "windows px"))
     for size, r in result["sizes"].items():

@@ -16,7 +16,10 @@ Cases (neighbours stand on the column line, centre distance = the sum of the rad
 each with the camera over the target ("centre") and, for isolated and touching, 8-22 cm off it in a random
 direction ("off"). A hit: a detection within half a crown of the target (``MATCH_RADIUS_CROWN``); neighbour
 recall counts the complete neighbours likewise; a false alarm is a detection within half a crown of no tree.
-Seeded: the same seed and count give the same figures.
+Seeded: the same seed and count give the same figures. ``--grouping period`` runs the module with its
+period-tied peak stage (``grouping period``) instead of today's grouping: with ``--period auto`` the period from
+each frame, with ``--period map`` the scene's own spacing (the target's nearest neighbour, in pixels at the
+camera's height) sent as ``periodpx``, as a flight map would give it (isolated: auto).
 """
 from __future__ import annotations
 
@@ -32,6 +35,7 @@ from host_tools.flight.vision_camera import MATCH_RADIUS_CROWN, VisionCamera, mo
 from host_tools.maps import PlantationMap, Tree
 from host_tools.sim.cli_args import appearance_from_args
 from host_tools.sim.crowns import AppearanceSpec
+from jevois_module.ForaNavTrees.foranav_detector import GROUPINGS
 
 DEFAULT_COUNT = 150  # frames per case
 CROWN_M = (0.30, 0.45)  # foranav plantation's --crown-m default
@@ -47,6 +51,7 @@ CASES = (("centre", "isolated"), ("centre", "touching"), ("centre", "between"), 
 CROWN_PX_BINS = ((0, 80), (80, 95), (95, 115), (115, 10000))
 FRAME_SIZE = (352, 288)
 TARGET_ID = 1
+DEFAULT_GROUPING = GROUPINGS[0]  # the camera module's default: today's grouping
 
 
 @dataclasses.dataclass
@@ -81,13 +86,24 @@ def _camera_pose(rng: np.random.Generator, where: str, altitude: float) -> tuple
     return x, y, altitude * float(rng.uniform(1.0 - HEIGHT_SPREAD, 1.0 + HEIGHT_SPREAD)), yaw
 
 
+def _map_spacing_px(camera: VisionCamera, pmap: PlantationMap, height_m: float) -> float:
+    """The distance from the target to its nearest neighbour, in pixels at this height (what the flight map's
+    spacing gives)."""
+    target = pmap.trees[0]
+    spacing_m = min(math.hypot(t.x - target.x, t.y - target.y) for t in pmap.trees[1:])
+    return spacing_m / camera.camera.metres_per_pixel(height_m)
+
+
 def _near(pixel, tree) -> bool:
     return math.hypot(pixel[0] - tree.u, pixel[1] - tree.v) <= MATCH_RADIUS_CROWN * tree.w
 
 
-def measure(model: str, count: int = DEFAULT_COUNT, seed: int = 0, appearance: AppearanceSpec | None = None) -> dict:
+def measure(model: str, count: int = DEFAULT_COUNT, seed: int = 0, appearance: AppearanceSpec | None = None,
+            grouping: str = DEFAULT_GROUPING, period: str = "auto") -> dict:
     """{"cases": [CaseResult as dict], "by_crown_px": [...]} for the model (path or shipped species); appearance:
-    the trees drawn from photo crowns (foranav bench recall --crowns CSV ...)."""
+    the trees drawn from photo crowns (foranav bench recall --crowns CSV ...); grouping: the module's
+    ``grouping`` parameter (nms, today's; period, the period-tied peak stage); period: "auto" (from each frame)
+    or "map" (the scene's neighbour spacing sent as ``periodpx``)."""
     common.load(model)  # a missing or damaged file: one line, before any frame is rendered
     path = model_option(common.model_path(model))  # absolute: the module joins a relative name to its folder
     cases, target_hits_by_px = [], []
@@ -96,8 +112,12 @@ def measure(model: str, count: int = DEFAULT_COUNT, seed: int = 0, appearance: A
         hits = neighbours = neighbour_hits = false_alarms = 0
         for _ in range(count):
             pmap = _scene(rng, case)
-            camera = VisionCamera(pmap, seed=int(rng.integers(2 ** 31)), model=path, appearance=appearance)
-            frame = camera.render(_camera_pose(rng, where, pmap.altitude_m))
+            camera = VisionCamera(pmap, seed=int(rng.integers(2 ** 31)), model=path, appearance=appearance,
+                                  module_params={"grouping": grouping})
+            pose = _camera_pose(rng, where, pmap.altitude_m)
+            if period == "map" and len(pmap.trees) > 1:
+                camera.runner.setpar("periodpx", "%.1f" % _map_spacing_px(camera, pmap, pose[2]))
+            frame = camera.render(pose)
             detections = parse_detections(camera.process(frame.image), *FRAME_SIZE)
             complete = [t for t in frame.trees if t.complete]
             target = [t for t in complete if t.id == TARGET_ID]
@@ -116,7 +136,7 @@ def measure(model: str, count: int = DEFAULT_COUNT, seed: int = 0, appearance: A
         chosen = [hit for px, hit in target_hits_by_px if low <= px < high]
         if chosen:
             by_px.append({"crown_px": [low, high], "frames": len(chosen), "target_recall": float(np.mean(chosen))})
-    return {"model": path, "seed": int(seed), "frames_per_case": count,
+    return {"model": path, "seed": int(seed), "frames_per_case": count, "grouping": grouping, "period": period,
             "crowns": list(appearance.crowns) if appearance is not None else [],
             "cases": [dataclasses.asdict(c) for c in cases], "by_crown_px": by_px}
 
@@ -124,12 +144,15 @@ def measure(model: str, count: int = DEFAULT_COUNT, seed: int = 0, appearance: A
 def run(args: argparse.Namespace) -> int:
     spec, _loaded = appearance_from_args(args, ("oil_palm",), "foranav bench recall")
     result = measure(getattr(args, "model", None) or "oil_palm", getattr(args, "count", None) or DEFAULT_COUNT,
-                     getattr(args, "seed", 0), None if spec.default else spec)
+                     getattr(args, "seed", 0), None if spec.default else spec,
+                     getattr(args, "grouping", None) or DEFAULT_GROUPING, getattr(args, "period", None) or "auto")
     if getattr(args, "json", False):
         print(json.dumps({"recall": result}, indent=2))
         return 0
-    print("model %s, %d rendered frames per case, seed %d%s" % (
-        result["model"], result["frames_per_case"], result["seed"],
+    print("model %s, grouping %s%s, %d rendered frames per case, seed %d%s" % (
+        result["model"], result["grouping"],
+        " (period %s)" % result["period"] if result["grouping"] == "period" else "", result["frames_per_case"],
+        result["seed"],
         ", photo crowns from %s" % ", ".join(result["crowns"]) if result["crowns"] else ""))
     print("%-7s %-9s %15s %16s %18s" % ("camera", "case", "target recall", "neighbour recall",
                                         "false alarms/frame"))

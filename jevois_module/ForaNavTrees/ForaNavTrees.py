@@ -86,6 +86,10 @@ class ForaNavTrees:
                       "scaled to the frame width)", "auto")
         self.addParam(pc, "step", "int", "Window step in downscaled pixels: W*step/24 in the frame "
                       "(8 = W/3 as in the paper)", foranav_detector.DEFAULT_STEP)
+        self.addParam(pc, "grouping", "str", "Peaks to trees: nms (overlap suppression, the default) or period "
+                      "(suppression within 0.6 planting periods: touching crowns stay apart)", "nms")
+        self.addParam(pc, "periodpx", "str", "Planting period in pixels for grouping period (e.g. the map's tree "
+                      "spacing at the current height), or auto (from each frame's autocorrelation)", "auto")
         self.addParam(pc, "maxtrees", "int", "At most this many trees reported per frame, best first",
                       foranav_detector.DEFAULT_MAX_DETECTIONS)
         self.addParam(pc, "serstyle", "str", "Serial message per tree: Terse (T2 x y) or Normal "
@@ -116,14 +120,16 @@ class ForaNavTrees:
         species = self.params["species"].get()
         key = (species, self.params["svmthresh"].get(), self.params["varthresh"].get(),
                self.params["hsthresh"].get(), self.params["windows"].get(), self.params["step"].get(),
-               self.params["maxtrees"].get(), self.params["edgethresh"].get())
+               self.params["maxtrees"].get(), self.params["edgethresh"].get(), self.params["grouping"].get(),
+               self.params["periodpx"].get())
         if self.loaded[1] != key:
             if self.loaded[0] != species:
                 self.model = self.loadModel(species)
             settings = foranav_detector.DetectorSettings(
                 svm_threshold=parseThreshold(key[1]), variance_threshold=parseThreshold(key[2]),
                 hs_threshold=parseThreshold(key[3]), window_sizes=parseWindows(key[4]), step=key[5],
-                max_detections=key[6], edge_threshold=parseEdgeThreshold(key[7]))
+                max_detections=key[6], edge_threshold=parseEdgeThreshold(key[7]), grouping=key[8],
+                period_px=parsePeriod(key[9]))
             self.detector = foranav_detector.TreeDetector(self.model, settings)
             self.loaded = (species, key)
         return self.detector
@@ -215,8 +221,8 @@ class ForaNavTrees:
         return ("foranav - list the tree detector settings\n"
                 "foranav <name> - show one setting\n"
                 "foranav <name> <value> - change a setting (species, svmthresh|varthresh|hsthresh <number>|auto, "
-                "edgethresh <number>|auto|off, windows <px,px>|auto, step, maxtrees, serstyle Terse|Normal, "
-                "framemark Stop|None)")
+                "edgethresh <number>|auto|off, windows <px,px>|auto, step, grouping nms|period, "
+                "periodpx <px>|auto, maxtrees, serstyle Terse|Normal, framemark Stop|None)")
 
 
 def parseThreshold(text):
@@ -236,6 +242,14 @@ def parseEdgeThreshold(text):
     if text == "off":
         return foranav_detector.EDGE_TEST_OFF
     return parseThreshold(text)
+
+
+def parsePeriod(text):
+    """'auto' -> None (estimated from each frame); '96' -> 96.0; ValueError unless a positive finite number."""
+    value = parseThreshold(text)
+    if value is not None and value <= 0:
+        raise ValueError("not a positive number: %s" % text)
+    return value
 
 
 def parseWindows(text):
@@ -261,6 +275,10 @@ def checkSetting(name, value, frameSize=None):
         elif name == "maxtrees":
             if not 1 <= int(value) <= MAX_TREES_LIMIT:
                 return "maxtrees out of range (1 to %d)" % MAX_TREES_LIMIT
+        elif name == "periodpx":
+            parsePeriod(value)
+        elif name == "grouping" and value not in foranav_detector.GROUPINGS:
+            return "grouping must be one of %s" % ", ".join(foranav_detector.GROUPINGS)
         elif name == "windows":
             return checkWindows(parseWindows(value), frameSize)
         elif name == "serstyle" and value not in SERSTYLES:

@@ -26,6 +26,7 @@ import foranav_colour as colours
 
 import foranav_features as features
 import foranav_grouping as grouping
+import foranav_period as period
 import foranav_score_maps as score_maps
 from foranav_grouping import Detection, window_in_frame  # noqa: F401  (host tools cut windows with it)
 
@@ -38,6 +39,10 @@ DEFAULT_SMOOTHING = 1.0  # removes single-window noise peaks; a crown's blob of 
 MAX_CANDIDATES = 64  # per frame, best first: bounds the work when a frame is full of tree-like texture
 CANDIDATES_PER_DETECTION = 8  # ... raised to this many per allowed detection
 EDGE_TEST_OFF = float("-inf")  # edge_threshold that switches the edge test off
+GROUPINGS = ("nms", "period")  # today's grouping (default), the period-tied peak stage (opt-in)
+PERIOD_SUPPRESSION = 0.6  # the period stage's suppression radius, in planting periods
+MIN_PERIOD_WINDOWS = 0.6  # a period estimated from the frame lies between this x the smallest window ...
+MAX_PERIOD_WINDOWS = 2.0  # ... and this x the largest (outside: frond texture or no grid; today's grouping)
 
 
 class DetectorSettings(object):
@@ -57,6 +62,13 @@ class DetectorSettings(object):
     max_detections      at most this many detections per frame, best first (None: no limit)
     domain              name of the model's imagery whose colour model and thresholds to use (None: the
                         only one, or the one nearest each frame's colours)
+    grouping            "nms": today's grouping (overlap NMS; a window that is part of an accepted crown is
+                        the same tree); "period": the period-tied peak stage, peaks suppressed within
+                        PERIOD_SUPPRESSION planting periods of a stronger one, whatever the window size, so
+                        that touching crowns (a period apart) stay apart (foranav_period)
+    period_px           the period stage's planting period in frame pixels (e.g. the flight map's tree
+                        spacing at the current height); None: estimated from each frame's autocorrelation,
+                        and a frame without a clear one falls back to today's grouping
     edge_threshold      score a peak on the border of its score map (window touching the frame edge) must
                         also exceed (EDGE_TEST_OFF: no such test). Such a peak is not a verified maximum:
                         the score may keep rising outside the frame, where the rest of a cut crown is.
@@ -68,7 +80,7 @@ class DetectorSettings(object):
     def __init__(self, svm_threshold=None, variance_threshold=None, hs_threshold=None, window_sizes=None,
                  step=DEFAULT_STEP, nms_overlap=DEFAULT_NMS_OVERLAP, max_detections=DEFAULT_MAX_DETECTIONS,
                  smoothing=DEFAULT_SMOOTHING, edge_threshold=None, domain=None, second_threshold=None,
-                 cnn_threshold=None):
+                 cnn_threshold=None, grouping="nms", period_px=None):
         self.svm_threshold = svm_threshold
         self.variance_threshold = variance_threshold
         self.hs_threshold = hs_threshold
@@ -80,6 +92,12 @@ class DetectorSettings(object):
         self.max_detections = None if max_detections is None else int(max_detections)
         self.domain = domain
         self.smoothing = float(smoothing)
+        self.grouping = grouping
+        self.period_px = None if period_px is None else float(period_px)
+        if self.grouping not in GROUPINGS:
+            raise ValueError("grouping must be one of %s" % ", ".join(GROUPINGS))
+        if self.period_px is not None and not 0.0 < self.period_px < float("inf"):
+            raise ValueError("period_px must be a positive number of pixels")
         self.edge_threshold = None if edge_threshold is None else float(edge_threshold)
         if self.edge_threshold is not None and self.edge_threshold != self.edge_threshold:
             raise ValueError("edge_threshold must be a number")
@@ -124,6 +142,7 @@ class TreeDetector(object):
         self._scorer = score_maps.WindowScorer(model.svm_weights, model.svm_bias)
         self._plans = {}
         self._window_scores = {}
+        self._period = period.PeriodEstimator()
         self._cnn = None if model.cnn_onnx is None else foranav_cnn.CnnStage(model.cnn_onnx, model.cnn_side)
         self._colour = [colours.prepare_colour_vectors(model.colour_kind, d.colour_vectors) for d in model.domains]
         self._fixed_domain = None
@@ -207,13 +226,18 @@ class TreeDetector(object):
                          domain=self.domain_index)
         if self.settings.max_detections is not None:
             del candidates[max(MAX_CANDIDATES, CANDIDATES_PER_DETECTION * self.settings.max_detections):]
+        radius = self.suppression_radius(value)
         if trace is not None:
             trace["capped"] = list(candidates)
+            trace["suppression_radius"] = radius
         detections = []
         hs_threshold, variance_threshold = self.threshold("hs_threshold"), self.threshold("variance_threshold")
         margin = self.model.window_margin
-        for group in grouping.group(candidates, self.settings.nms_overlap):
-            group = self.representative_first(grouping.anchored(group), detections, hsv, hs_threshold, trace)
+        groups = (grouping.group(candidates, self.settings.nms_overlap) if radius is None
+                  else grouping.group_by_centre(candidates, radius))
+        for group in groups:
+            group = self.representative_first(grouping.anchored(group), detections, hsv, hs_threshold, trace,
+                                              radius)
             if group is None:
                 continue
             x0, y0, side = window = grouping.pixel_window(group[0], value.shape)
@@ -235,7 +259,19 @@ class TreeDetector(object):
                     break
         return detections
 
-    def representative_first(self, group, detections, hsv, hs_threshold, trace):
+    def suppression_radius(self, value):
+        """The period stage's suppression radius in frame pixels, or None for today's grouping (the default,
+        or a frame whose autocorrelation shows no clear period)."""
+        if self.settings.grouping != "period":
+            return None
+        spacing = self.settings.period_px
+        if spacing is None:
+            sizes = self.window_sizes(value.shape[1])
+            spacing = self._period.estimate(value, MIN_PERIOD_WINDOWS * min(sizes),
+                                            MAX_PERIOD_WINDOWS * max(sizes))
+        return None if spacing is None else PERIOD_SUPPRESSION * spacing
+
+    def representative_first(self, group, detections, hsv, hs_threshold, trace, radius=None):
         """The group with its representative first, or None: the first window, of the group's anchor and then
         the smaller windows the anchor holds (best first), that is not part of an accepted crown and passes
         the colour test.
@@ -246,11 +282,14 @@ class TreeDetector(object):
         window, and used to take the crown-sized windows down with it. From straight above a 75-99 px crown
         touching a larger one at 1.3-1.5 m (sweep flights 43, 119, 294) the 144-168 px window failed colour
         (0.41-0.62) while the 96-120 px windows it held scored 0.95-0.99, and the crown went unseen for a
-        minute; in flight 6 a 168 px window reaching 32 px towards the next tree was dropped as that tree's."""
+        minute; in flight 6 a 168 px window reaching 32 px towards the next tree was dropped as that tree's.
+        radius: the period stage's suppression radius (a window centred that near an accepted detection is
+        part of it), None for today's rule (grouping.inside_a_crown)."""
         anchor = group[0]
         margin = self.model.window_margin
         for window in [anchor] + [c for c in group[1:] if grouping.holds(anchor, c)]:
-            if grouping.inside_a_crown(window, detections, margin):
+            if (grouping.inside_a_crown(window, detections, margin) if radius is None
+                    else grouping.near_a_centre(window, detections, radius)):
                 continue
             x0, y0, side = grouping.pixel_window(window, hsv.shape)
             if trace is not None and window is anchor:  # "nms": groups' best windows (funnel, hard negatives)

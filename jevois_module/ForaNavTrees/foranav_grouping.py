@@ -73,6 +73,28 @@ def group(candidates, overlap):
         remaining = remaining[~member]
 
 
+def group_by_centre(candidates, radius):
+    """The period stage's suppression, on candidates sorted best first: each group = the best remaining + those
+    centred within radius of it, whatever their window size (radius from the planting period, not the
+    crown size: two touching crowns stand a period apart, a crown's off-centre peaks well within it)."""
+    if not candidates:
+        return
+    centres = np.array([c[1:3] for c in candidates], np.float64)
+    remaining = np.arange(len(candidates))
+    while len(remaining):
+        offsets = centres[remaining] - centres[remaining[0]]
+        member = (offsets * offsets).sum(axis=1) <= radius * radius
+        member[0] = True
+        yield [candidates[i] for i in remaining[member].tolist()]
+        remaining = remaining[~member]
+
+
+def near_a_centre(candidate, detections, radius):
+    """The period stage's counterpart of inside_a_crown: the candidate is centred within radius of an
+    accepted detection."""
+    return any((candidate[1] - d.x) ** 2 + (candidate[2] - d.y) ** 2 <= radius * radius for d in detections)
+
+
 def _ious(box, boxes):
     """iou of one window (cx, cy, side) with an array of them, elementwise."""
     half, halves = box[2] / 2.0, boxes[:, 2] / 2.0
