@@ -38,7 +38,7 @@ void navParamsDefaults(NavParams* p) {
   p->crown_size_m = 0.35;
   p->column_factor = 1.5;
   p->row_spacing_m = 0.0;
-  p->anchor_min_trees = 1;
+  p->anchor_min_trees = 0;
   p->anchor_gain = 0.5;
   p->min_hits = 2;
   p->tree_capacity = 32;

@@ -218,7 +218,7 @@ def test_that_a_tree_never_seen_again_is_abandoned_and_the_mission_goes_on():
 
 def test_that_return_to_path_runs_after_a_tree_and_ends_on_the_path():
     # the C app's return-to-path branch could never run
-    world = World([(0.35, 0.2)])
+    world = World([(0.35, 0.2)], anchor_min_trees=1)
     assert world.run(20000, until=lambda w: bool(w.events("tree_reached")))
     assert world.core.phase == nc.PHASE_RETURN_TO_PATH
     assert world.run(20000, until=lambda w: w.core.phase == nc.PHASE_FOLLOW_PATH)
@@ -345,7 +345,7 @@ DRIFT_ROW = [(0.4 + 0.5 * i, 0.0) for i in range(7)]  # one row of 7 trees along
 
 
 def test_that_reanchoring_on_the_trees_follows_the_row_when_the_estimate_drifts():
-    world = DriftingWorld(DRIFT_ROW)
+    world = DriftingWorld(DRIFT_ROW, anchor_min_trees=1)
     world.run(300000, until=lambda w: w.core.phase == nc.PHASE_DONE)
     reached = world.events("tree_reached")
     assert len(reached) == len(DRIFT_ROW)

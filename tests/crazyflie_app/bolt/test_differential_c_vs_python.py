@@ -85,8 +85,8 @@ class Divergence(AssertionError):
 class TwinCores(object):
     """Feeds both cores and compares their outputs after every call."""
 
-    def __init__(self, pmap):
-        params = NavigationParams()
+    def __init__(self, pmap, anchor_min_trees=1):
+        params = NavigationParams(anchor_min_trees=anchor_min_trees)  # re-anchoring on (issue 42) unless told
         params.altitude_m = pmap.altitude_m
         self.py = NavigationCore(params, pmap.waypoints)
         self.c = CNavigationCore(c_params(params), pmap.waypoints)
