@@ -12,6 +12,8 @@ A map is a JSON object:
     objects         [{kind, x, y, size_m, yaw_deg}, ...]       optional look-alikes: roof, road_cross
     seed            int      optional: ground texture and per-tree variation (default 0)
     target_species  str      optional: the species the mission targets (default oil_palm)
+    row_spacing_m   number   optional: centre-to-centre distance between adjacent planting rows (m); the app
+                             takes it as app.rowSpacing and its column rule never reaches past half of it
 
 Coordinates lie within +-MAX_COORDINATE_M (1000 m), crown_m and size_m are at most MAX_SIZE_M (5 m).
 
@@ -82,6 +84,7 @@ class PlantationMap:
     seed: int = 0
     target_species: str = "oil_palm"
     source: str = field(default="", compare=False)
+    row_spacing_m: float = 0.0  # 0: the map does not give it
 
     @property
     def targets(self) -> tuple[Tree, ...]:
@@ -104,9 +107,10 @@ def path_length_m(waypoints: Sequence[Point]) -> float:
     return sum(math.hypot(b[0] - a[0], b[1] - a[1]) for a, b in zip(waypoints[:-1], waypoints[1:]))
 
 
-def in_planting_column(x: float, y: float, crown_m: float, waypoints: Sequence[Point]) -> bool:
-    """The app's planting-column rule, against every segment of the path."""
-    return within_column(distance_to_path(x, y, waypoints), crown_m, COLUMN_RULE_FACTOR)
+def in_planting_column(x: float, y: float, crown_m: float, waypoints: Sequence[Point],
+                       row_spacing_m: float = 0.0) -> bool:
+    """The app's planting-column rule, against every segment of the path (``row_spacing_m`` 0: not given)."""
+    return within_column(distance_to_path(x, y, waypoints), crown_m, COLUMN_RULE_FACTOR, row_spacing_m)
 
 
 # ----------------------------------------------------------------------------------------------------------
@@ -185,7 +189,7 @@ def map_from_dict(data: dict, source: str = "<map>") -> PlantationMap:
     """Validate a decoded JSON object and build a PlantationMap."""
     c = _Checker(source)
     c.fields(data, "", ("name", "altitude_m", "waypoints", "trees"),
-             ("objects", "seed", "target_species"))
+             ("objects", "seed", "target_species", "row_spacing_m"))
     name = c.string(data, "name", "")
     if len(name) > MAX_NAME_CHARS:
         c.fail("name", "a name of %d characters; at most %d" % (len(name), MAX_NAME_CHARS))
@@ -200,6 +204,10 @@ def map_from_dict(data: dict, source: str = "<map>") -> PlantationMap:
     seed = c.integer(data, "seed", "") if "seed" in data else 0
     if not 0 <= seed <= MAX_SEED:
         c.fail("seed", "must be an integer from 0 to %d, got %d" % (MAX_SEED, seed))
+
+    row_spacing = c.number(data, "row_spacing_m", "", positive=True) if "row_spacing_m" in data else 0.0
+    if row_spacing > MAX_COORDINATE_M:
+        c.fail("row_spacing_m", "must be at most %g m, got %r" % (MAX_COORDINATE_M, row_spacing))
 
     raw_wps = c.array(data, "waypoints", "")
     if len(raw_wps) < 2:
@@ -228,7 +236,7 @@ def map_from_dict(data: dict, source: str = "<map>") -> PlantationMap:
                 c.fail(where + "target", "must be true or false")
             target = t["target"]
         else:
-            target = species == target_species and in_planting_column(x, y, crown, waypoints)
+            target = species == target_species and in_planting_column(x, y, crown, waypoints, row_spacing)
         trees.append(Tree(tree_id, x, y, species, crown, target))
 
     objects = []
@@ -238,7 +246,8 @@ def map_from_dict(data: dict, source: str = "<map>") -> PlantationMap:
         objects.append(WorldObject(c.string(o, "kind", where, OBJECT_KINDS), c.coordinate(o, "x", where),
                                    c.coordinate(o, "y", where), c.size(o, "size_m", where),
                                    c.number(o, "yaw_deg", where) if "yaw_deg" in o else 0.0))
-    return PlantationMap(name, altitude, waypoints, tuple(trees), tuple(objects), seed, target_species, source)
+    return PlantationMap(name, altitude, waypoints, tuple(trees), tuple(objects), seed, target_species, source,
+                         row_spacing)
 
 
 def map_to_dict(pmap: PlantationMap) -> dict:
@@ -250,6 +259,8 @@ def map_to_dict(pmap: PlantationMap) -> dict:
         data["objects"] = [asdict(o) for o in pmap.objects]
     data["seed"] = pmap.seed
     data["target_species"] = pmap.target_species
+    if pmap.row_spacing_m > 0.0:  # only when given: maps without it keep their bytes
+        data["row_spacing_m"] = pmap.row_spacing_m
     return data
 
 

@@ -78,6 +78,20 @@ class NavigationParams:
     duplicate_radius_m: float = 0.25
     crown_size_m: float = 0.35
     column_factor: float = COLUMN_FACTOR  # paper: 1.5 x crown size
+    # centre-to-centre distance of adjacent rows (a map's row_spacing_m); the column is at most half of it wide
+    # (a tree belongs to its nearest row). 0: not given, the paper's 1.5 crowns alone
+    row_spacing_m: float = 0.0
+    # re-anchoring (path_following): the row line is corrected at each tree reached from at least this many
+    # trees seen at that instant (the reached one and the column's trees in view). 1: a row's next tree is
+    # often not in view yet when one is reached, and waiting for two let the drift carry the next trees out
+    # of the column (tuning sweep). 0: off (the waypoints are flown in the estimate's frame, as before).
+    # Off by default for now: on (1, as measured in docs/results.md) the vision flight of Map 1 with garbage
+    # lines (test_vision_camera_flights, seed 2) visits the non-target beside Tree 3; set app.anchorMin 1 to fly it
+    anchor_min_trees: int = 0
+    # ... each correction moving the line this fraction of the way: a tree planted off its row (Map 1's Tree 3,
+    # 0.12 m) must not pull the line enough to take in a palm beside the row (Map 1's Tree 7, 0.63 m off);
+    # the drift, growing over several trees, is still followed
+    anchor_gain: float = 0.5
     min_hits: int = 2
     tree_capacity: int = 32
     visited_capacity: int = 64

@@ -295,6 +295,16 @@ PARAM_TABLE = param_group("app", [
               valid=(0.1, 20.0)),
     param_add(PARAM_FLOAT, "columnFactor", "column_factor", "",
               "planting column half-width in crown sizes (paper: 1.5)", valid=(0.1, 10.0)),
+    param_add(PARAM_FLOAT, "rowSpacing", "row_spacing_m", "m",
+              "centre distance of adjacent rows (a map's row_spacing_m): the column is at most half of it wide, "
+              "a tree belongs to its nearest row (0: not given, columnFactor crowns alone)", valid=(0.0, 100.0)),
+    param_add(PARAM_UINT8, "anchorMin", "anchor_min_trees", "",
+              "re-anchoring: at each tree reached the row line is corrected from the trees seen then (it and the "
+              "column's trees in view) when there are at least this many; the estimate drifts, the rows do not "
+              "(0: off, the waypoints in the estimate's frame)", valid=(0, 255)),
+    param_add(PARAM_FLOAT, "anchorGain", "anchor_gain", "",
+              "re-anchoring: each correction moves the row line this fraction of the way to the trees seen (a tree "
+              "planted off its row must not pull in a palm beside it)", valid=(0.0, 1.0)),
     param_add(PARAM_UINT8, "minHits", "min_hits", "", "detections before a tree may become the target", valid=(1, 255)),
     param_add(PARAM_UINT8, "treeCapacity", "tree_capacity", "", "capacity of T_d (overflow evicts, counted)",
               valid=(1, 64)),

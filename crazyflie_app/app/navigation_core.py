@@ -196,7 +196,7 @@ class NavigationCore:
         route = self.route
         goal = route.goal
         if route.waypoint_reached(pose):
-            route.waypoint_index += 1
+            route.advance()
             self.events.append(Event("waypoint", t_ms, detail="%d" % (route.waypoint_index - 1)))
             if route.finished:
                 if self._start_revisit(t_ms, pose):
@@ -215,7 +215,8 @@ class NavigationCore:
     def eligible_trees(self) -> list[StoredTree]:
         p = self.params
         return [t for t in self.memory.trees.values()
-                if t.hits >= p.min_hits and self.route.in_planting_column(t.x, t.y)]
+                if t.hits >= p.min_hits and self.route.in_planting_column(t.x, t.y)
+                and not self.route.behind(t.x, t.y)]
 
     def _select_target(self, t_ms, pose):
         candidates = self.eligible_trees()
@@ -270,7 +271,16 @@ class NavigationCore:
         self.events.append(Event("tree_reached", t_ms, tree.id, cx, cy,
                                  detail="s_t %.3f %.3f" % (tree.x, tree.y)))
         self._drop_target()
+        self.route.note_reached(cx, cy)
+        self.route.reanchor(self._row_in_view(t_ms, (cx, cy)))
         return self._after_tree(t_ms, pose)
+
+    def _row_in_view(self, t_ms, reached_at):
+        """The row as the camera sees it now, over a reached tree (path_following, re-anchoring): the reached
+        tree where the camera centres on it, then the column's trees that may be targets and were seen
+        within ``lostTimeout`` (T_d order)."""
+        return [reached_at] + [(t.x, t.y) for t in self.eligible_trees()
+                               if t_ms - t.last_ms <= self.params.lost_timeout_ms]
 
     def _after_tree(self, t_ms, pose):
         """A target is done (reached, abandoned or evicted): back to the path, or, while going back for

@@ -42,7 +42,7 @@ CFrame = tuple[list[tuple[float, float]], list[int], list[tuple[float, float]]]
 _D, _I = ctypes.c_double, ctypes.c_int32
 # NavParams of nav_core.h, in its order; the names are NavigationParams' fields (a test checks they agree)
 _INT_PARAMS = {"takeoff_settle_ms", "land_step_ms", "settle_dwell_ms", "settle_grace_ms", "lost_timeout_ms",
-               "recovery_timeout_ms", "target_timeout_ms", "min_hits", "tree_capacity", "visited_capacity",
+               "recovery_timeout_ms", "target_timeout_ms", "anchor_min_trees", "min_hits", "tree_capacity", "visited_capacity",
                "cam_width_px", "cam_height_px", "cam_latency_ms", "link_hold_ms", "link_land_ms", "camera_wait_ms",
                "frame_capacity"}
 PARAM_NAMES = (
@@ -51,7 +51,7 @@ PARAM_NAMES = (
     "capture_radius_px", "settle_radius_px", "settle_dwell_ms", "settle_speed", "settle_relax", "settle_grace_ms",
     "servo_integral", "servo_integral_band", "recovery_distance_m", "lost_timeout_ms", "recovery_timeout_ms",
     "target_timeout_ms", "recovery_speed", "return_tolerance_m", "merge_radius_m", "duplicate_radius_m",
-    "crown_size_m", "column_factor",
+    "crown_size_m", "column_factor", "row_spacing_m", "anchor_min_trees", "anchor_gain",
     "min_hits", "tree_capacity", "visited_capacity", "cam_width_px", "cam_height_px", "cam_scale", "cam_offset_x_m",
     "cam_offset_y_m", "cam_latency_ms", "kf_measurement_std_px", "kf_accel_psd", "link_hold_ms", "link_land_ms",
     "camera_wait_ms", "frame_capacity")

@@ -101,6 +101,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "filter fuses (--estimator is the older name)")
     parser.add_argument("--wind", type=argtypes.float_range(*WIND_RANGE_MPS2), default=0.0,
                         help="wind gust acceleration std (m/s^2)")
+    parser.add_argument("--flow-scale", type=argtypes.float_range(0.5, 2.0), default=None, metavar="K",
+                        help="firmware plant: the Flow deck reports K counts per count of motion (1.05: 5 %% long)")
+    parser.add_argument("--flow-bias", type=argtypes.float_range(0.0, 5.0), default=None, metavar="COUNTS",
+                        help="firmware plant: counts added to each 10 ms flow frame, x and y")
+    parser.add_argument("--ground-texture", type=argtypes.float_range(0.0, 1.0), default=None, metavar="Q",
+                        help="firmware plant: ground texture for the Flow deck (1 textured .. 0 featureless; "
+                             "below 0.5 counts under-read, below 0.35 frames are lost)")
     parser.add_argument("--mavlink", type=argtypes.mavlink_url, help="also stream the telemetry live, e.g. udpout:127.0.0.1:14550")
     parser.add_argument("--crtp", type=argtypes.udp_endpoint, metavar="[HOST:]PORT", default=None,
                         help="serve CRTP on udp://HOST:PORT for cflib/cfclient (host 127.0.0.1 unless given; "
@@ -137,7 +144,20 @@ def flight_options(args: argparse.Namespace) -> dict:
         options["crtp"] = args.crtp
     if args.cam_offset is not None:
         options["params"] = {"app.camOffsetX": args.cam_offset[0], "app.camOffsetY": args.cam_offset[1]}
+    for option, field_name in FLOW_DRIFT_OPTIONS:
+        value = getattr(args, option)
+        if value is None:
+            continue
+        if args.plant != "firmware":
+            raise ForaNavError("--%s: models the firmware plant's Flow deck; add --plant firmware"
+                               % option.replace("_", "-"))
+        options["model"][field_name] = value
     return options
+
+
+# fly options of the firmware plant's Flow deck drift (the sweeps' drift conditions): (option, config field)
+FLOW_DRIFT_OPTIONS = (("flow_scale", "flow_scale"), ("flow_bias", "flow_bias_counts"),
+                      ("ground_texture", "ground_texture"))
 
 
 def _window(text: str) -> tuple[float, float]:

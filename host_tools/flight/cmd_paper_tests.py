@@ -28,6 +28,7 @@ from host_tools.flight import paper_tests
 from host_tools.flight.cmd_fly import add_plant_argument
 from host_tools.flight.components import check_crtp_endpoint, plant_config
 from host_tools.flight.paper_tests import PAPER_TESTS
+from host_tools.flight.registry import POSITIONINGS
 from host_tools.flight.vision_camera import model_option
 from host_tools.maps import load_map
 from host_tools.sim.cli_args import add_appearance_arguments, appearance_from_args
@@ -46,6 +47,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--app", choices=("python", "c"), default="python",
                         help="flight app: python (default) or c (the C core of crazyflie_app/bolt)")
     add_plant_argument(parser)
+    parser.add_argument("--positioning", choices=POSITIONINGS, default="uwb",
+                        help="uwb (default): Loco deck + Flow deck; flow: the Flow deck alone (the estimate drifts)")
     parser.add_argument("--crtp", type=argtypes.udp_endpoint, metavar="[HOST:]PORT", default=None,
                         help="each test serves CRTP for cflib/cfclient: the first on PORT, the next on PORT+1, "
                              "... (docs/crtp.md)")
@@ -98,7 +101,7 @@ def run(args: argparse.Namespace) -> int:
 
     results = paper_tests.run_tests(tests, out_dir=args.out, jobs=args.jobs, on_result=on_result,
                                     camera_kwargs=camera_kwargs, app=args.app, plant=args.plant,
-                                    crtp=args.crtp)
+                                    crtp=args.crtp, positioning=args.positioning)
     wall = round(time.monotonic() - started, 1)
     paths = paper_tests.write_outputs(results, Path(args.out), wall_s=wall, appearance=camera_kwargs.get("appearance"))
     if args.json:

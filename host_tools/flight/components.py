@@ -81,6 +81,8 @@ class FlightRig:
             raise
         registry = self.cf.registry
         registry.param_set("app.altitude", pmap.altitude_m)
+        if pmap.row_spacing_m > 0.0:  # the planting's row spacing, when the map gives it (app.rowSpacing)
+            registry.param_set("app.rowSpacing", pmap.row_spacing_m)
         registry.param_set("app.camLatency", camera.latency_ms)
         for name, value in (options["params"] or {}).items():
             try:

@@ -25,6 +25,7 @@ from pathlib import Path
 
 from host_tools import fileio
 from host_tools.flight.figures import plot_deviation, plot_map_tests, read_ground_truth_track
+from host_tools.flight.registry import plant_model_options
 from host_tools.flight.vision_camera import fly_with_vision
 from host_tools.maps import load_map
 from host_tools.sim.crowns import AppearanceSpec, load_appearance
@@ -77,15 +78,17 @@ def passed(summary: dict) -> bool:
 
 def fly_test(test: PaperTest, out_dir: str | os.PathLike | None = None, map_path: str | None = None,
              camera_kwargs: dict | None = None, app: str = "python", plant: str = "reduced",
-             crtp: str | None = None) -> dict:
+             crtp: str | None = None, positioning: str = "uwb") -> dict:
     """Fly one PaperTest -> the fly summary plus "test", "map", "situation", "passed", "wall_s".
 
     ``camera_kwargs``: extra VisionCamera arguments (appearance, model) from the command line; ``app``: the
     flight app, 'python' or 'c' (harness option ``app``); ``plant``: 'reduced' or 'firmware'; ``crtp``:
-    'HOST:PORT' the flight serves CRTP on."""
+    'HOST:PORT' the flight serves CRTP on; ``positioning``: 'uwb' (Loco + Flow deck) or 'flow' (Flow deck
+    alone)."""
     pmap = load_map(map_path or test.map)
     started = time.monotonic()
-    options = {"max_time_s": MAX_TIME_S, "app": app, "plant": plant, "crtp": crtp}
+    options = {"max_time_s": MAX_TIME_S, "app": app, "plant": plant, "crtp": crtp,
+               "model": plant_model_options(plant, positioning, 0.0)}
     options.update(test.options)
     summary = fly_with_vision(pmap, seed=test.seed, options=options,
                               out_dir=None if out_dir is None else Path(out_dir) / ("test%d" % test.number),
@@ -106,7 +109,7 @@ def crtp_endpoints(base: str | None, count: int) -> list[str | None]:
 def run_tests(tests: Sequence[PaperTest] = PAPER_TESTS, out_dir: str | os.PathLike | None = None,
               jobs: int | None = None, on_result: Callable[[dict], None] | None = None,
               camera_kwargs: dict | None = None, app: str = "python", plant: str = "reduced",
-              crtp: str | None = None) -> list[dict]:
+              crtp: str | None = None, positioning: str = "uwb") -> list[dict]:
     """Fly ``tests`` (in test order in the result); ``on_result(entry)`` is called as each one finishes.
     ``crtp``: 'HOST:PORT' served by the first test, PORT+1 by the second, ... (``crtp_endpoints``)."""
     jobs = max(1, min(len(tests), jobs or os.cpu_count() or 1))
@@ -114,7 +117,7 @@ def run_tests(tests: Sequence[PaperTest] = PAPER_TESTS, out_dir: str | os.PathLi
     by_number = {}
     context = multiprocessing.get_context("spawn")
     with concurrent.futures.ProcessPoolExecutor(max_workers=jobs, mp_context=context) as pool:
-        futures = [pool.submit(fly_test, test, out_dir, None, camera_kwargs, app, plant, endpoint)
+        futures = [pool.submit(fly_test, test, out_dir, None, camera_kwargs, app, plant, endpoint, positioning)
                    for test, endpoint in zip(tests, crtp_endpoints(crtp, len(tests)))]
         for future in concurrent.futures.as_completed(futures):
             entry = future.result()

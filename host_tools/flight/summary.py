@@ -22,6 +22,15 @@ def error_figures(errors: list[tuple[float, float]]) -> dict | None:
     return {"position_m": _figures([e[0] for e in errors], 4), "yaw_deg": _figures([e[1] for e in errors], 2)}
 
 
+def flown_m(record) -> float:
+    """The true horizontal distance flown while airborne (m, from the trajectory samples): what an estimate's
+    drift per distance is taken over."""
+    end = record.done_ms if record.done_ms is not None else float("inf")
+    points = [(x, y) for t, x, y, _, _, _ in record.trajectory
+              if record.takeoff_ms is not None and record.takeoff_ms <= t <= end]
+    return round(sum(math.hypot(b[0] - a[0], b[1] - a[1]) for a, b in zip(points, points[1:])), 3)
+
+
 def summarize(flight: FlightView) -> dict:
     """The flight summary (the record fly prints and sweeps store) of a finished Flight."""
     rig, record, pmap = flight.rig, flight.record, flight.pmap
@@ -73,6 +82,7 @@ def summarize(flight: FlightView) -> dict:
         "crashed": rig.cf.model.crashed,
         "crash": rig.cf.model.crash_reason,
         "estimate_error": error_figures(record.estimate_errors),
+        "flown_m": flown_m(record),
         "hidden_tree": flight.options["hide_tree"],
         "hidden_from_s": None if flight.hide.started_ms is None else flight.hide.started_ms / 1000.0,
     }

@@ -14,6 +14,15 @@ estimator; values are rounded so the fly command carries them exactly):
     cam_offset_m       (0, 0)            U(-0.05, 0.05) each   U(-0.1, 0.1)     mount offset (fwd, left), known
                                                                                 to the app (app.camOffsetX/Y)
 
+The Flow deck's drift (firmware plant only; none of the presets above sets it; ``drift`` is ``moderate`` with
+the flow deck alone in every flight and these drawn too; docs/sweeps.md has the table of flawless rate
+against the drift per 10 m flown):
+
+    condition          drift
+    flow_scale         U(0.9, 1.1)      counts reported per count of motion (pixel angle, lens, height error)
+    flow_bias_counts   U(0, 0.1)        counts added to each 10 ms frame, x and y (0.1 ~ 2.6 cm/s at 1.25 m)
+    ground_texture     U(0.2, 1)        below 0.5 the counts under-read, below 0.35 frames lose the motion flag
+
 Wind: with the oracle on Map 1 and no other fault, gusts of 0.05-0.15 m/s^2 are flown flawlessly (slower),
 0.2 and above make the app abandon targets (APPROACH never settles within settleRadius before its timeout);
 with the other moderate faults on random plantations misses start near 0.16 m/s^2. So moderate stays below
@@ -41,8 +50,12 @@ FAULT_PRESETS = {
               "fps": (4.0, 10.0), "wind_mps2": (0.1, 0.4), "flow_probability": 0.5,
               "cam_offset_m": (-0.1, 0.1)},
 }
+FAULT_PRESETS["drift"] = dict(FAULT_PRESETS["moderate"], flow_probability=1.0, flow_scale=(0.9, 1.1),
+                              flow_bias_counts=(0.0, 0.1), ground_texture=(0.2, 1.0))
 CONDITION_NAMES = ("dropout", "pixel_noise_px", "latency_frames", "fps", "wind_mps2", "flow_probability",
                    "cam_offset_m")
+# drawn after every condition above, so the flights of the other presets keep their values
+DRIFT_CONDITION_NAMES = ("flow_scale", "flow_bias_counts", "ground_texture")
 CAMERAS = ("sim", "oracle")
 # Each condition within what its fly option accepts (a sweep runs `fly` with it): checked here, in the parent,
 # so a NaN, inf or 1e9 is one line before any Dask worker starts (issue 45: workers died and the scheduler
@@ -58,8 +71,9 @@ def preset(name: str, overrides: dict | None = None) -> dict:
         raise ForaNavError("--faults: unknown preset %r (have %s)" % (name, ", ".join(FAULT_PRESETS)))
     spec = dict(FAULT_PRESETS[name])
     for key, value in (overrides or {}).items():
-        if key not in CONDITION_NAMES:
-            raise ForaNavError("--condition %s: unknown (known: %s)" % (key, ", ".join(CONDITION_NAMES)))
+        if key not in CONDITION_NAMES + DRIFT_CONDITION_NAMES:
+            raise ForaNavError("--condition %s: unknown (known: %s)"
+                               % (key, ", ".join(CONDITION_NAMES + DRIFT_CONDITION_NAMES)))
         if key == "flow_probability":
             if not 0.0 <= float(value) <= 1.0:
                 raise ForaNavError("--condition flow_probability: must be in [0, 1], got %r" % (value,))
@@ -72,11 +86,15 @@ def preset(name: str, overrides: dict | None = None) -> dict:
         spec[key] = value
     if "dropout" in spec and not 0.0 <= spec["dropout"][0] <= spec["dropout"][1] <= 1.0:
         raise ForaNavError("--condition dropout: must lie in [0, 1]")
-    for key in ("pixel_noise_px", "wind_mps2"):
+    for key in ("pixel_noise_px", "wind_mps2", "flow_bias_counts"):
         if key in spec and spec[key][0] < 0:
             raise ForaNavError("--condition %s: must not be negative" % key)
     if "fps" in spec and spec["fps"][0] <= 0 or "latency_frames" in spec and spec["latency_frames"][0] < 0:
         raise ForaNavError("--condition fps must be positive, latency_frames not negative")
+    if "flow_scale" in spec and not 0.5 <= spec["flow_scale"][0] <= spec["flow_scale"][1] <= 2.0:
+        raise ForaNavError("--condition flow_scale: must lie in [0.5, 2]")
+    if "ground_texture" in spec and not 0.0 <= spec["ground_texture"][0] <= spec["ground_texture"][1] <= 1.0:
+        raise ForaNavError("--condition ground_texture: must lie in [0, 1]")
     return spec
 
 
@@ -106,6 +124,11 @@ def draw(rng: np.random.Generator, distributions: dict, camera: str) -> dict:
     if "cam_offset_m" in d:
         out["cam_offset_m"] = [_scaled(offset_roll[0], d["cam_offset_m"], 4),
                                _scaled(offset_roll[1], d["cam_offset_m"], 4)]
+    if any(key in d for key in DRIFT_CONDITION_NAMES):  # only then: the other presets' streams are unchanged
+        drift_roll = {key: float(rng.random()) for key in DRIFT_CONDITION_NAMES}
+        for key in DRIFT_CONDITION_NAMES:
+            if key in d:
+                out[key] = _scaled(drift_roll[key], d[key], 4)
     return out
 
 
@@ -136,6 +159,10 @@ def fly_arguments(conditions: dict) -> list[str]:
         args += ["--wind", repr(conditions["wind_mps2"])]
     if "cam_offset_m" in conditions:
         args += ["--cam-offset", repr(conditions["cam_offset_m"][0]), repr(conditions["cam_offset_m"][1])]
+    for key, option in (("flow_scale", "--flow-scale"), ("flow_bias_counts", "--flow-bias"),
+                        ("ground_texture", "--ground-texture")):
+        if key in conditions:
+            args += [option, repr(conditions[key])]
     return args
 
 

@@ -50,6 +50,12 @@ FACTORS = {
     "wind_mps2": ("conditions", (0.0, 0.2, 0.4, 0.8001)),
     "estimator": ("conditions", None),
     "cam_offset_m": ("conditions", (0.0, 0.04, 0.08, 0.1501)),
+    "flow_scale": ("conditions", (0.9, 0.95, 1.0, 1.05, 1.1001)),
+    "flow_bias_counts": ("conditions", (0.0, 0.025, 0.05, 0.075, 0.1001)),
+    "ground_texture": ("conditions", (0.0, 0.35, 0.5, 0.75, 1.0001)),
+    # what a user can measure of their own deck: the largest position error of the estimate over the flight,
+    # per 10 m flown (m)
+    "drift_per_10m_m": ("summary", (0.0, 0.25, 0.5, 1.0, 2.0, 4.0)),
 }
 
 
@@ -91,8 +97,18 @@ def flawless(row: dict) -> bool:
     return row["status"] == "ok" and bool(row["summary"]["success"])
 
 
+def drift_per_10m(summary: dict | None) -> float | None:
+    """The estimate's largest position error over the flight per 10 m flown (m), or None (no figures)."""
+    error, flown = (summary or {}).get("estimate_error"), (summary or {}).get("flown_m")
+    if not error or not flown:
+        return None
+    return error["position_m"]["max"] / flown * 10.0
+
+
 def _factor_value(row, name):
     where, _ = FACTORS[name]
+    if where == "summary":
+        return drift_per_10m(row.get("summary")) if row["status"] == "ok" else None
     source = row["spec"][where]
     if name == "cam_offset_m":
         value = source.get(name)

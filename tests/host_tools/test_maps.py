@@ -115,3 +115,18 @@ def test_that_atomic_writes_leave_a_normal_file_mode(tmp_path):
         os.umask(old)
     assert (tmp_path / "a.txt").stat().st_mode & 0o777 == 0o644
     assert [p.name for p in tmp_path.iterdir()] == ["a.txt"]
+
+
+def test_that_a_row_spacing_caps_the_target_rule_and_round_trips():
+    # rows 0.8 m apart: a palm 0.45 m off the path is in the paper's 0.525 m column (crown 0.35 m), but
+    # nearer the next row than half the spacing allows; the field is kept through a save
+    data = {"name": "rows", "altitude_m": 1.25, "waypoints": [[0, 0], [3, 0]],
+            "trees": [{"id": 1, "x": 1.0, "y": 0.45, "species": "oil_palm", "crown_m": 0.35},
+                      {"id": 2, "x": 2.0, "y": 0.1, "species": "oil_palm", "crown_m": 0.35}]}
+    plain = map_from_dict(dict(data))
+    spaced = map_from_dict(dict(data, row_spacing_m=0.8))
+    assert [t.target for t in plain.trees] == [True, True]
+    assert [t.target for t in spaced.trees] == [False, True]
+    assert map_to_dict(spaced)["row_spacing_m"] == 0.8 and "row_spacing_m" not in map_to_dict(plain)
+    with pytest.raises(ForaNavError, match="row_spacing_m"):
+        map_from_dict(dict(data, row_spacing_m=-1))

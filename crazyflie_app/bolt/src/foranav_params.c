@@ -45,6 +45,9 @@ static struct {
   float dupRadius;
   float crownSize;
   float columnFactor;
+  float rowSpacing;
+  uint8_t anchorMin;
+  float anchorGain;
   uint8_t minHits;
   uint8_t treeCapacity;
   uint16_t visitedCap;
@@ -93,6 +96,9 @@ void foranavParamsToCore(NavParams* p) {
   p->duplicate_radius_m = (double)appParams.dupRadius;
   p->crown_size_m = (double)appParams.crownSize;
   p->column_factor = (double)appParams.columnFactor;
+  p->row_spacing_m = (double)appParams.rowSpacing;
+  p->anchor_min_trees = (int32_t)appParams.anchorMin;
+  p->anchor_gain = (double)appParams.anchorGain;
   p->min_hits = (int32_t)appParams.minHits;
   p->tree_capacity = (int32_t)appParams.treeCapacity;
   p->visited_capacity = (int32_t)appParams.visitedCap;
@@ -141,6 +147,9 @@ void foranavParamsFromCore(const NavParams* p) {
   appParams.dupRadius = (float)p->duplicate_radius_m;
   appParams.crownSize = (float)p->crown_size_m;
   appParams.columnFactor = (float)p->column_factor;
+  appParams.rowSpacing = (float)p->row_spacing_m;
+  appParams.anchorMin = (uint8_t)p->anchor_min_trees;
+  appParams.anchorGain = (float)p->anchor_gain;
   appParams.minHits = (uint8_t)p->min_hits;
   appParams.treeCapacity = (uint8_t)p->tree_capacity;
   appParams.visitedCap = (uint16_t)p->visited_capacity;
@@ -291,6 +300,18 @@ PARAM_ADD(PARAM_FLOAT, crownSize, &appParams.crownSize)
  * @brief planting column half-width in crown sizes (paper: 1.5) (-)
  */
 PARAM_ADD(PARAM_FLOAT, columnFactor, &appParams.columnFactor)
+/**
+ * @brief centre distance of adjacent rows: the column is at most half of it wide (0: not given) (m)
+ */
+PARAM_ADD(PARAM_FLOAT, rowSpacing, &appParams.rowSpacing)
+/**
+ * @brief re-anchoring: the row line is corrected at each tree reached from at least this many trees seen (0: off) (-)
+ */
+PARAM_ADD(PARAM_UINT8, anchorMin, &appParams.anchorMin)
+/**
+ * @brief re-anchoring: each correction moves the row line this fraction of the way to the trees seen (-)
+ */
+PARAM_ADD(PARAM_FLOAT, anchorGain, &appParams.anchorGain)
 /**
  * @brief detections before a tree may become the target (-)
  */

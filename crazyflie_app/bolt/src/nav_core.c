@@ -22,8 +22,8 @@ bool navCoreInit(NavCore* core, const NavParams* params, const double* xy, int32
   }
   core->params = *params;
   for (int32_t i = 0; i < waypoints; i++) {
-    core->path[i][0] = xy[2 * i];
-    core->path[i][1] = xy[2 * i + 1];
+    core->planned[i][0] = core->path[i][0] = xy[2 * i];
+    core->planned[i][1] = core->path[i][1] = xy[2 * i + 1];
   }
   core->path_length = waypoints;
   navTreesInit(&core->memory, params->tree_capacity, params->visited_capacity);
@@ -47,6 +47,27 @@ int32_t navCoreDrainEvents(NavCore* core, NavEvent* out, int32_t max_events) {
 
 /* -- visual approach ------------------------------------------------------------------------------------ */
 
+static bool eligibleTree(const NavCore* core, int32_t index);
+
+/* Re-anchoring on the row as the camera sees it over a reached tree (navigation_core._row_in_view): the reached
+ * tree at (x, y), then the column's eligible trees seen within lostTimeout, in T_d order. */
+static void reanchorOnRow(NavCore* core, int32_t t_ms, double x, double y) {
+  double across, sum;
+  if (!navAcrossPlanned(core, x, y, &sum)) {
+    return;
+  }
+  int32_t count = 1;
+  for (int32_t i = 0; i < core->memory.num_trees; i++) {
+    const NavTree* t = &core->memory.trees[i];
+    if (eligibleTree(core, i) && t_ms - t->last_ms <= core->params.lost_timeout_ms &&
+        navAcrossPlanned(core, t->x, t->y, &across)) {
+      sum += across;
+      count++;
+    }
+  }
+  navReanchor(core, sum, count);
+}
+
 static NavCommand reached(NavCore* core, int32_t t_ms, const NavPose* pose, const NavTree* tree) {
   double cx, cy;
   navCameraGroundPoint(core, pose, &cx, &cy);
@@ -60,6 +81,8 @@ static NavCommand reached(NavCore* core, int32_t t_ms, const NavPose* pose, cons
     e->b = ty;
   }
   navDropTarget(core);
+  navNoteReached(core, cx, cy);
+  reanchorOnRow(core, t_ms, cx, cy);
   return navAfterTree(core, t_ms, pose);
 }
 
@@ -119,7 +142,7 @@ static NavCommand stepApproach(NavCore* core, int32_t t_ms, const NavPose* pose)
 /* A stored tree that may become the target: seen often enough, in the planting column (eligible_trees). */
 static bool eligibleTree(const NavCore* core, int32_t index) {
   const NavTree* t = &core->memory.trees[index];
-  return t->hits >= core->params.min_hits && navInPlantingColumn(core, t->x, t->y);
+  return t->hits >= core->params.min_hits && navInPlantingColumn(core, t->x, t->y) && !navBehind(core, t->x, t->y);
 }
 
 static bool selectTarget(NavCore* core, int32_t t_ms, const NavPose* pose) {
@@ -154,7 +177,7 @@ static NavCommand stepFollow(NavCore* core, int32_t t_ms, const NavPose* pose) {
   const NavParams* p = &core->params;
   const double* goal = core->path[core->waypoint_index];
   if (navWaypointReached(core, pose)) {
-    core->waypoint_index++;
+    navAdvanceWaypoint(core);
     NavEvent* e = navPushEvent(core, NAV_EVENT_WAYPOINT, t_ms, 0, 0.0, 0.0);
     if (e != NULL) {
       e->n = core->waypoint_index - 1;

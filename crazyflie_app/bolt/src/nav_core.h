@@ -99,6 +99,9 @@ typedef struct {
   double duplicate_radius_m;
   double crown_size_m;
   double column_factor;
+  double row_spacing_m;     /* 0: not given */
+  int32_t anchor_min_trees; /* 0: re-anchoring off */
+  double anchor_gain;
   int32_t min_hits;
   int32_t tree_capacity;
   int32_t visited_capacity;
@@ -188,8 +191,12 @@ typedef struct {
 
 typedef struct {
   NavParams params;
-  double path[NAV_MAX_WAYPOINTS][2];
+  double planned[NAV_MAX_WAYPOINTS][2]; /* the waypoints as given */
+  double path[NAV_MAX_WAYPOINTS][2];    /* the path flown: the waypoints moved by offset (re-anchoring) */
   int32_t path_length;
+  double offset[2];
+  bool has_progress; /* a tree of the current segment was reached ... */
+  double progress;   /* ... this far along it */
   NavTreeMemory memory;
   NavCounters counters;
   NavPhase phase;

@@ -36,6 +36,18 @@ int32_t navMergeDuplicates(NavCore* core, const NavDetection* detections, int32_
 double navDistanceToSegment(double px, double py, const double a[2], const double b[2]);
 void navCurrentSegment(const NavCore* core, const double** a, const double** b);
 bool navInPlantingColumn(const NavCore* core, double x, double y);
+/* Half the planting column's width: columnFactor crowns, at most half of rowSpacing when given. */
+double navColumnHalfWidth(const NavParams* p);
+/* On to the next waypoint (a new segment forgets its progress). */
+void navAdvanceWaypoint(NavCore* core);
+/* Along the current segment from its start (m); progress and the trees behind it (PathFollower.behind). */
+double navAlong(const NavCore* core, double x, double y);
+void navNoteReached(NavCore* core, double x, double y);
+bool navBehind(const NavCore* core, double x, double y);
+/* Re-anchoring (PathFollower.reanchor): the distance of (x, y) across the planned current segment (false: the
+ * segment has no length), and the correction from the sum of count such distances. */
+bool navAcrossPlanned(const NavCore* core, double x, double y, double* across);
+void navReanchor(NavCore* core, double across_sum, int32_t count);
 /* How far beyond its end waypoint a segment is flown (PathFollower.end_reach_m), and where it ends. */
 double navEndReach(const NavParams* p);
 void navSegmentEnd(const NavCore* core, double end[2]);

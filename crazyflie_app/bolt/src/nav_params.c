@@ -37,6 +37,9 @@ void navParamsDefaults(NavParams* p) {
   p->duplicate_radius_m = 0.25;
   p->crown_size_m = 0.35;
   p->column_factor = 1.5;
+  p->row_spacing_m = 0.0;
+  p->anchor_min_trees = 0;
+  p->anchor_gain = 0.5;
   p->min_hits = 2;
   p->tree_capacity = 32;
   p->visited_capacity = 64;

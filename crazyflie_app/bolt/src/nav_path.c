@@ -1,7 +1,9 @@
 /*
  * Path following (crazyflie_app/app/path_following.py): the current segment of F, the planting column around it,
  * the waypoint rule and the carrot velocity along the segment. A segment is flown navEndReach beyond its end
- * waypoint, until the rest of the planting column beyond it has been in whole view.
+ * waypoint, until the rest of the planting column beyond it has been in whole view. The path flown is the
+ * waypoints moved by the re-anchoring's offset (corrected from the trees seen at each tree reached), and trees
+ * behind the last one reached on a segment are passed (path_following.py says why).
  */
 #include <math.h>
 
@@ -14,22 +16,111 @@ double navDistanceToSegment(double px, double py, const double a[2], const doubl
   return hypot(px - a[0] - t * dx, py - a[1] - t * dy);
 }
 
-void navCurrentSegment(const NavCore* core, const double** a, const double** b) {
+static int32_t segmentIndex(const NavCore* core) {
   int32_t k = core->waypoint_index > 1 ? core->waypoint_index : 1;
-  k = k < core->path_length - 1 ? k : core->path_length - 1;
+  return k < core->path_length - 1 ? k : core->path_length - 1;
+}
+
+void navCurrentSegment(const NavCore* core, const double** a, const double** b) {
+  const int32_t k = segmentIndex(core);
   *a = core->path[k - 1];
   *b = core->path[k];
+}
+
+double navColumnHalfWidth(const NavParams* p) {
+  double half = p->column_factor * p->crown_size_m;
+  if (p->row_spacing_m > 0.0 && p->row_spacing_m / 2.0 < half) {
+    half = p->row_spacing_m / 2.0;
+  }
+  return half;
 }
 
 bool navInPlantingColumn(const NavCore* core, double x, double y) {
   const double *a, *b;
   navCurrentSegment(core, &a, &b);
-  return navDistanceToSegment(x, y, a, b) <= core->params.column_factor * core->params.crown_size_m;
+  return navDistanceToSegment(x, y, a, b) <= navColumnHalfWidth(&core->params);
+}
+
+void navAdvanceWaypoint(NavCore* core) {
+  core->waypoint_index++;
+  if (core->waypoint_index >= 2) {
+    core->has_progress = false;
+  }
+}
+
+double navAlong(const NavCore* core, double x, double y) {
+  const double *a, *b;
+  navCurrentSegment(core, &a, &b);
+  const double dx = b[0] - a[0], dy = b[1] - a[1];
+  double length = hypot(dx, dy);
+  if (length == 0.0) {
+    length = 1e-9;
+  }
+  return ((x - a[0]) * dx + (y - a[1]) * dy) / length;
+}
+
+void navNoteReached(NavCore* core, double x, double y) {
+  core->progress = navAlong(core, x, y);
+  core->has_progress = true;
+}
+
+bool navBehind(const NavCore* core, double x, double y) {
+  return core->has_progress && navAlong(core, x, y) < core->progress - core->params.merge_radius_m;
+}
+
+/* the unit normal of the planned current segment (false: no length) */
+static bool plannedNormal(const NavCore* core, const double** a, double* nx, double* ny) {
+  const int32_t k = segmentIndex(core);
+  const double* b = core->planned[k];
+  *a = core->planned[k - 1];
+  const double dx = b[0] - (*a)[0], dy = b[1] - (*a)[1];
+  const double length = hypot(dx, dy);
+  if (length == 0.0) {
+    return false;
+  }
+  *nx = -dy / length;
+  *ny = dx / length;
+  return true;
+}
+
+bool navAcrossPlanned(const NavCore* core, double x, double y, double* across) {
+  const double* a;
+  double nx, ny;
+  if (!plannedNormal(core, &a, &nx, &ny)) {
+    return false;
+  }
+  *across = (x - a[0]) * nx + (y - a[1]) * ny;
+  return true;
+}
+
+void navReanchor(NavCore* core, double across_sum, int32_t count) {
+  const double* a;
+  double nx, ny;
+  if (core->params.anchor_min_trees <= 0 || count < core->params.anchor_min_trees ||
+      !plannedNormal(core, &a, &nx, &ny)) {
+    return;
+  }
+  const double shift =
+      core->params.anchor_gain * (across_sum / (double)count - (core->offset[0] * nx + core->offset[1] * ny));
+  core->offset[0] = core->offset[0] + shift * nx;
+  core->offset[1] = core->offset[1] + shift * ny;
+  for (int32_t i = 0; i < core->path_length; i++) {
+    core->path[i][0] = core->planned[i][0] + core->offset[0];
+    core->path[i][1] = core->planned[i][1] + core->offset[1];
+  }
+}
+
+/* The MAV is in the first row past its first waypoint (PathFollower.in_first_row). */
+static bool inFirstRow(const NavCore* core, const NavPose* pose) {
+  const double* a = core->path[0];
+  const double* b = core->path[1];
+  const double along = (pose->x - a[0]) * (b[0] - a[0]) + (pose->y - a[1]) * (b[1] - a[1]);
+  return along > 0.0 && navDistanceToSegment(pose->x, pose->y, a, b) <= navColumnHalfWidth(&core->params);
 }
 
 double navEndReach(const NavParams* p) {
   const double in_view_m = (double)p->cam_height_px / 2.0 * p->altitude_m / navFocalPx(p) - p->crown_size_m / 2.0;
-  return maxd(0.0, p->column_factor * p->crown_size_m - in_view_m);
+  return maxd(0.0, navColumnHalfWidth(p) - in_view_m);
 }
 
 void navSegmentEnd(const NavCore* core, double end[2]) {
@@ -67,7 +158,7 @@ bool navWaypointReached(const NavCore* core, const NavPose* pose) {
     return true;
   }
   if (core->waypoint_index == 0) {
-    return false;
+    return inFirstRow(core, pose);
   }
   const double* a = core->path[core->waypoint_index - 1];
   const double dx = end[0] - a[0], dy = end[1] - a[1];

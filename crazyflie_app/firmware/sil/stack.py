@@ -74,6 +74,10 @@ class FirmwarePlantConfig:
     acc_noise_g: float = _setting(0.004, "g", "accelerometer white noise per sample")
     acc_bias_g: float = _setting(0.002, "g", "std of the accelerometer bias")
     flow_noise_px: float = _setting(1.0, "counts", "PMW3901 noise (the sensor's units: 10x pixels)")
+    flow_scale: float = _setting(1.0, "", "counts the PMW3901 reports per count of true motion (1.05: reads 5 % long; "
+                                 "a pixel-angle or lens error; the sweeps' drift condition)")
+    flow_bias_counts: float = _setting(0.0, "counts", "added to each 10 ms frame's x and y counts (0.1 at 1.25 m "
+                                       "is ~2.6 cm/s of velocity the Kalman filter integrates; a drift condition)")
     ground_texture: float = _setting(1.0, "0..1", "ground texture the flow sensor tracks: below 0.35 frames lose "
                                      "the motion flag, below 0.5 the counts under-read, noise grows as it falls")
     light: float = _setting(1.0, "0..1", "light level: below 0.3 the flow sensor's quality falls with it")
@@ -117,7 +121,8 @@ class _Config(ctypes.Structure):
                 ("angular_drag_nm_per_radps", _D), ("battery_full_v", _D), ("battery_empty_v", _D),
                 ("battery_capacity_mah", _D), ("battery_resistance_ohm", _D), ("reference_v", _D),
                 ("hover_current_a", _D), ("gyro_noise_dps", _D), ("gyro_bias_dps", _D), ("acc_noise_g", _D),
-                ("acc_bias_g", _D), ("flow_noise_px", _D), ("ground_texture", _D), ("light", _D),
+                ("acc_bias_g", _D), ("flow_noise_px", _D), ("flow_scale", _D), ("flow_bias_counts", _D),
+                ("ground_texture", _D), ("light", _D),
                 ("tof_noise_m", _D), ("tof_max_m", _D), ("positioning", _I), ("uwb_noise_m", _D),
                 ("uwb_nlos_probability", _D), ("uwb_nlos_max_m", _D), ("anchors", (_D * 3) * NR_OF_ANCHORS),
                 ("wind_gust_mps2", _D), ("wind_tau_s", _D), ("start", _D * 3), ("start_yaw_deg", _D),

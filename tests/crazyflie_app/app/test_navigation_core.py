@@ -218,11 +218,13 @@ def test_that_a_tree_never_seen_again_is_abandoned_and_the_mission_goes_on():
 
 def test_that_return_to_path_runs_after_a_tree_and_ends_on_the_path():
     # the C app's return-to-path branch could never run
-    world = World([(0.35, 0.2)])
+    world = World([(0.35, 0.2)], anchor_min_trees=1)
     assert world.run(20000, until=lambda w: bool(w.events("tree_reached")))
     assert world.core.phase == nc.PHASE_RETURN_TO_PATH
     assert world.run(20000, until=lambda w: w.core.phase == nc.PHASE_FOLLOW_PATH)
-    assert abs(world.y) < world.params.return_tolerance_m
+    # on the path as flown: the waypoints' line moved towards the reached tree (re-anchoring)
+    assert world.core.route.cross_track(world.pose()) < world.params.return_tolerance_m
+    assert 0.0 < world.core.route.offset[1] < 0.2
 
 
 def test_that_the_target_survives_the_removal_of_another_tree():
@@ -328,3 +330,58 @@ def test_that_the_last_tree_of_a_column_beyond_its_end_waypoint_is_reached():
     world.whole_crowns_m = 0.35  # the camera reports a crown only when it lies whole in the frame
     assert world.run(60000, until=lambda w: w.core.phase == nc.PHASE_DONE)
     assert len(world.events("tree_reached")) == 1
+
+
+class DriftingWorld(World):
+    """World whose state estimate drifts across the row as the MAV flies along it (the Flow deck alone):
+    estimate y = true y + DRIFT_PER_M x true x. The camera sees the trees from the true pose."""
+
+    def pose(self):
+        return Pose(self.x, self.y + DRIFT_PER_M * self.x, self.params.altitude_m, 0.0, self.vx, self.vy)
+
+
+DRIFT_PER_M = 0.3  # 0.9 m across the row after 3 m: every tree past ~1.8 m would leave the 0.525 m column
+DRIFT_ROW = [(0.4 + 0.5 * i, 0.0) for i in range(7)]  # one row of 7 trees along the path, 0.5 m apart
+
+
+def test_that_reanchoring_on_the_trees_follows_the_row_when_the_estimate_drifts():
+    world = DriftingWorld(DRIFT_ROW, anchor_min_trees=1)
+    world.run(300000, until=lambda w: w.core.phase == nc.PHASE_DONE)
+    reached = world.events("tree_reached")
+    assert len(reached) == len(DRIFT_ROW)
+    # the flown line moved with the drift (estimate frame): towards +y, most of the 0.3 m/m x 3.4 m
+    assert world.core.route.offset[1] > 0.5
+
+
+def test_that_without_reanchoring_the_drifted_estimate_loses_the_row():
+    # the same flight with re-anchoring off (app.anchorMin 0): the trees leave the column; this is what the
+    # feature fixes, and shows the scenario above can fail
+    world = DriftingWorld(DRIFT_ROW, anchor_min_trees=0)
+    world.run(300000, until=lambda w: w.core.phase == nc.PHASE_DONE)
+    assert len(world.events("tree_reached")) < len(DRIFT_ROW) - 2
+
+
+def test_that_a_tree_behind_the_last_reached_one_is_not_a_target():
+    core = NavigationCore(NavigationParams(), PATH)
+    core.route.note_reached(2.0, 0.0)
+    assert core.route.behind(1.4, 0.0) and not core.route.behind(1.7, 0.0) and not core.route.behind(2.5, 0.0)
+    core.route.advance()  # 0 -> 1: still the first row
+    assert core.route.behind(1.4, 0.0)
+
+
+def test_that_the_first_waypoint_is_passed_from_inside_the_first_row():
+    core = NavigationCore(NavigationParams(), PATH)
+    assert core.route.waypoint_reached(Pose(0.8, 0.1, ALTITUDE, 0.0, 0.0, 0.0))  # in the row, past (0, 0)
+    assert not core.route.waypoint_reached(Pose(-0.5, 0.0, ALTITUDE, 0.0, 0.0, 0.0))  # before it
+    assert not core.route.waypoint_reached(Pose(0.8, 0.9, ALTITUDE, 0.0, 0.0, 0.0))  # beside the row
+
+
+def test_that_the_row_spacing_caps_the_planting_column():
+    # rows 0.6 m apart: the paper's 0.525 m column would take in the next row's trees at 0.6 m with 0.1 m
+    # jitter; half the spacing keeps each tree with its nearest row
+    plain = NavigationCore(NavigationParams(), PATH)
+    spaced = NavigationCore(NavigationParams(row_spacing_m=0.6), PATH)
+    assert plain.in_planting_column(1.0, 0.5) and not spaced.in_planting_column(1.0, 0.5)
+    assert spaced.in_planting_column(1.0, 0.25)
+    wide = NavigationCore(NavigationParams(row_spacing_m=4.0), PATH)  # wide rows: the paper's rule holds
+    assert wide.in_planting_column(1.0, 0.5) and not wide.in_planting_column(1.0, 0.6)

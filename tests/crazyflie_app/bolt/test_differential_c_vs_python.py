@@ -85,8 +85,8 @@ class Divergence(AssertionError):
 class TwinCores(object):
     """Feeds both cores and compares their outputs after every call."""
 
-    def __init__(self, pmap):
-        params = NavigationParams()
+    def __init__(self, pmap, anchor_min_trees=1):
+        params = NavigationParams(anchor_min_trees=anchor_min_trees)  # re-anchoring on (issue 42) unless told
         params.altitude_m = pmap.altitude_m
         self.py = NavigationCore(params, pmap.waypoints)
         self.c = CNavigationCore(c_params(params), pmap.waypoints)
@@ -148,14 +148,15 @@ class TwinCores(object):
         self._compare_state(t_ms)
 
 
-def fly_twins(pmap, seed, ghost_rate=0.0, cover_rate=0.0, hide=True):
+def fly_twins(pmap, seed, ghost_rate=0.0, cover_rate=0.0, hide=True, drift_per_m=0.0):
     """Fly the closed loop with both cores; returns (steps compared, phases seen, twins).
 
     ``ghost_rate``: probability per detection of one GHOST_OFFSET_M off the crown centre (an off-centre window
     on a crown cut by the frame edge), in half of those frames instead of the centred one: one crown can be
     stored twice. ``cover_rate``: probability per frame that two crowns closer than COVER_PAIR_M, both in view,
     are reported as one detection halfway between them (a window over both). ``hide``: False leaves out the
-    window with every detection hidden."""
+    window with every detection hidden. ``drift_per_m``: the estimate drifts across y by this much per metre
+    of x flown (the Flow deck alone), so the cores re-anchor their paths on the trees."""
     rng = np.random.default_rng([seed, 13])
     twins = TwinCores(pmap)
     x, y = map(float, pmap.waypoints[0])
@@ -171,7 +172,7 @@ def fly_twins(pmap, seed, ghost_rate=0.0, cover_rate=0.0, hide=True):
     steps = 0
     for t in range(0, MAX_TIME_MS, STEP_MS):
         yaw = float(rng.normal(0.0, 0.5))
-        est = Pose(x + float(rng.normal(0, 0.005)), y + float(rng.normal(0, 0.005)),
+        est = Pose(x + float(rng.normal(0, 0.005)), y + drift_per_m * abs(x) + float(rng.normal(0, 0.005)),
                    max(0.0, z + float(rng.normal(0, 0.003))), yaw, vx + float(rng.normal(0, 0.005)),
                    vy + float(rng.normal(0, 0.005)))
         while pending and pending[0][0] <= t:
@@ -322,6 +323,15 @@ def test_that_the_c_core_keeps_a_tree_outside_the_column_off_a_stored_neighbour_
     steps, phases, twins = fly_twins(pmap, seed=59)
     assert "DONE" in phases
     assert twins.py.counters.reached == 4
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_that_both_cores_reanchor_alike_on_a_drifting_estimate(seed):
+    # the estimate drifts 0.15 m across y per metre of x: both cores move their paths on the trees reached
+    pmap = random_plantation(seed)
+    steps, phases, twins = fly_twins(pmap, seed, drift_per_m=0.15)
+    assert "LAND" in phases and twins.calls > 0
+    assert twins.py.route.offset != (0.0, 0.0)
 
 
 def test_that_a_divergence_names_the_first_differing_step():

@@ -38,6 +38,8 @@ typedef struct {
   double acc_bias_g;
   /* flow deck: PMW3901 and VL53L1x */
   double flow_noise_px;         /* std of the counts, in the sensor's units (10x pixels) */
+  double flow_scale;            /* counts reported per count of motion (1: exact; the pixel angle's error) */
+  double flow_bias_counts;      /* counts added to each frame's x and y (a bias the Kalman filter integrates) */
   double ground_texture;        /* 1 textured ground .. 0 featureless */
   double light;                 /* 1 daylight .. 0 dark */
   double tof_noise_m;

@@ -94,10 +94,13 @@ bool silSensorsFlow(sil_sensors_t *s, const sil_config_t *c, const sil_body_t *b
   const double under_read = quality >= 0.5 ? 1.0 : 0.5 + quality;
   const double noise = c->flow_noise_px * (1.0 + 3.0 * (1.0 - quality));
   /* the sensor accumulates motion in its delta registers: what a read leaves below a count stays for the next */
-  const double counts_x = s->flow_residual[0] + under_read * scale * (velocity[0] * r[2][2] / height - body->rates[1])
-                          + noise * noise_x;
-  const double counts_y = s->flow_residual[1] + under_read * scale * (velocity[1] * r[2][2] / height + body->rates[0])
-                          + noise * noise_y;
+  /* the sweeps' drift conditions: a scale error (the pixel angle, the lens, the height the sensor assumes)
+   * and a bias per frame */
+  const double gain = under_read * scale * c->flow_scale;
+  const double counts_x = s->flow_residual[0] + gain * (velocity[0] * r[2][2] / height - body->rates[1])
+                          + c->flow_bias_counts + noise * noise_x;
+  const double counts_y = s->flow_residual[1] + gain * (velocity[1] * r[2][2] / height + body->rates[0])
+                          + c->flow_bias_counts + noise * noise_y;
   const long accpx = lround(counts_x), accpy = lround(counts_y);
   s->flow_residual[0] = counts_x - (double)accpx;
   s->flow_residual[1] = counts_y - (double)accpy;
