@@ -24,12 +24,13 @@ POSITIONINGS = ("uwb", "flow")  # Loco deck + Flow deck, or the Flow deck alone
 
 
 class Camera(Protocol):
-    """What the harness asks of a camera (see the harness docstring); ``mount_offset`` is optional."""
+    """What the harness asks of a camera (see the harness docstring); ``mount_offset`` is optional.
+    ``true_pose`` is (x, y, z, yaw, roll, pitch) (``FlightRig.camera_pose``); a camera may use the first four."""
 
     frame_period_ms: int
     latency_ms: int
 
-    def capture(self, t_ms: int, true_pose: tuple[float, float, float, float],
+    def capture(self, t_ms: int, true_pose: tuple[float, ...],
                 hidden: frozenset[int] = frozenset()) -> list[str]: ...
 
 
