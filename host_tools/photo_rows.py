@@ -8,10 +8,11 @@ heading and oil palms are planted in triangles, so three directions line palms u
    distance (``BUNCH_SIGMA_CROWN`` crowns). Along the true rows whole rows fall on one offset, so the direction
    with the best support wins (of a triangular planting's three, the one its palms line up best along); a
    given ``heading_deg`` skips the search.
-2. **Rows.** Palms are taken in order along the heading; each joins the row whose last palm is nearest across
+2. **Rows.** Palms are taken in order along the heading; each joins the row whose continuation is nearest across
    (within ``JOIN_ACROSS_SPACING`` row spacings, the spacing being the median gap between the peaks of the
    across-row density) and not farther behind than ``MAX_GAP_PALMS`` palm spacings (missing palms), else it
-   starts a row. Following the last palm, not a straight line, lets a row bend.
+   starts a row. "Nearest across" is measured from where the row's last palms point (a bend goes on
+   bending), so rows may bend.
 3. **Lines.** A row of at least ``MIN_ROW_PALMS`` palms becomes a least-squares line from its first to its
    last palm, or, where the palms leave that line by more than ``BEND_TOLERANCE_CROWN`` crowns, a polyline
    through the palms where it bends (Douglas-Peucker).
@@ -30,6 +31,8 @@ BUNCH_SIGMA_CROWN = 0.15  # across-row spread of one row's centres the heading s
 JOIN_ACROSS_SPACING = 0.4  # a palm joins a row whose last palm is within this many row spacings across
 MAX_GAP_PALMS = 3.2  # ... and at most this many palm spacings behind (two missing palms in a row)
 MIN_ROW_PALMS = 3
+MAX_PREDICTED_SLOPE = math.tan(math.radians(10.0))  # a row's local direction, against the heading
+SLOPE_PALMS = 4  # a row's local direction: the line of its last this many palms
 BEND_TOLERANCE_CROWN = 0.3  # a row bends where its palms leave the straight line by more than this
 
 
@@ -121,7 +124,7 @@ def _chain(along, across, tolerance, max_gap):
             last = members[-1]
             if along[i] - along[last] > max_gap or along[i] == along[last]:
                 continue
-            d = abs(across[i] - across[last])
+            d = abs(across[i] - _predicted_across(members, along, across, along[i]))
             if d <= best_d:
                 best, best_d = r, d
         if best is None:
@@ -129,6 +132,22 @@ def _chain(along, across, tolerance, max_gap):
         else:
             rows[best].append(int(i))
     return [np.array(m) for m in rows]
+
+
+def _predicted_across(members, along, across, at):
+    """Where the row's line continues across at ``at``: the least-squares line of its last ``SLOPE_PALMS`` palms
+    (a bend goes on bending; a single palm's row: level with it)."""
+    last = members[-1]
+    recent = members[-SLOPE_PALMS:]
+    if len(recent) < 2:
+        return across[last]
+    a, c = along[recent], across[recent]
+    spread = float(((a - a.mean()) ** 2).sum())
+    if spread <= 1e-12:
+        return across[last]
+    slope = float(((a - a.mean()) * (c - c.mean())).sum()) / spread
+    slope = max(-MAX_PREDICTED_SLOPE, min(MAX_PREDICTED_SLOPE, slope)) if len(recent) >= SLOPE_PALMS else 0.0
+    return c.mean() + slope * (at - a.mean())
 
 
 def _row_line(points, along, heading_deg, bend_tolerance):
