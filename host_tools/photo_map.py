@@ -9,7 +9,9 @@ found. The flight path F is the rows flown serpentine (or a subset: ``rows``), e
 camera's whole view stays inside the photo while the MAV flies it, centres on any tree of its column or flies
 a segment's reach beyond its end (``view_margins``); or the waypoints the user gives, in photo pixels.
 
-Targets are derived by the map loader with the app's own column rule (host_tools.maps.in_planting_column).
+Targets are written out by the app's own column rule: within columnFactor (1.5) x the app's crownSize
+(0.35 m) of a segment of the path (crazyflie_app/app/path_following.py), not each photo crown's own size, since
+the app knows one crown size.
 The map stores the photo's path relative to the map file, its SHA-256 and the scale, and the row spacing
 (``row_spacing_m``) the fit found.
 """
@@ -22,9 +24,11 @@ from pathlib import Path
 import numpy as np
 
 from crazyflie_app.app.nav_types import NavigationParams
+from crazyflie_app.app.path_following import within_column
 from host_tools import annotations, images
 from host_tools.errors import ForaNavError
 from host_tools.maps import (ALTITUDE_RANGE_M, COLUMN_RULE_FACTOR, MAX_COORDINATE_M, MAX_SIZE_M, SPECIES, PhotoGround, Point,
+                             distance_to_path,
                              map_from_dict, map_to_dict)
 from host_tools.photo_rows import RowFit, fit_rows
 from host_tools.sim.camera import CameraModel
@@ -110,7 +114,8 @@ def build_photo_map(req: PhotoMapRequest) -> PhotoMapResult:
         rows_flown = len(lines)
         spacing = round(fit.row_spacing, 4) if fit.row_spacing is not None else None
     trees = [{"id": i + 1, "x": round(float(x), 4), "y": round(float(y), 4), "species": req.label,
-              "crown_m": round(float(c), 4)} for i, ((x, y), c) in enumerate(zip(centres, crowns))]
+              "crown_m": round(float(c), 4), "target": app_column_target(float(x), float(y), waypoints)}
+             for i, ((x, y), c) in enumerate(zip(centres, crowns))]
     raw = {"name": req.name or Path(req.photo).stem, "altitude_m": req.altitude_m,
            "waypoints": [[round(float(x), 4), round(float(y), 4)] for x, y in waypoints], "trees": trees,
            "seed": 0, "target_species": req.label, "photo": _photo_dict(photo)}
@@ -119,6 +124,14 @@ def build_photo_map(req: PhotoMapRequest) -> PhotoMapResult:
     pmap = map_from_dict(raw, source=req.out)
     return PhotoMapResult(map_to_dict(pmap), fit, rows_flown, rows_found, len(pmap.targets), len(pmap.trees), mpp,
                           spacing, tuple(notes))
+
+
+def app_column_target(x: float, y: float, waypoints: list[Point]) -> bool:
+    """The app's own column rule: within columnFactor x its crownSize (not the photo's crown of that tree: the
+    app knows one crown size) of a segment of the path."""
+    xy = (round(x, 4), round(y, 4))
+    path = [(round(float(a), 4), round(float(b), 4)) for a, b in waypoints]
+    return within_column(distance_to_path(xy[0], xy[1], path), APP_PARAMS.crown_size_m, COLUMN_RULE_FACTOR)
 
 
 def photo_boxes(csv_path: str, photo: str, label: str, width_px: int, height_px: int) -> list[annotations.Box]:
