@@ -27,9 +27,8 @@ from crazyflie_app.app.nav_types import NavigationParams
 from crazyflie_app.app.path_following import within_column
 from host_tools import annotations, images
 from host_tools.errors import ForaNavError
-from host_tools.maps import (ALTITUDE_RANGE_M, COLUMN_RULE_FACTOR, MAX_COORDINATE_M, MAX_SIZE_M, SPECIES, PhotoGround, Point,
-                             distance_to_path,
-                             map_from_dict, map_to_dict)
+from host_tools.maps import (ALTITUDE_RANGE_M, COLUMN_RULE_FACTOR, MAX_COORDINATE_M, MAX_SIZE_M, SPECIES,
+                             PhotoGround, Point, distance_to_path, map_from_dict, map_to_dict)
 from host_tools.photo_rows import RowFit, fit_rows
 from host_tools.sim.camera import CameraModel
 
