@@ -20,7 +20,8 @@ from host_tools.flight.components import check_crtp_endpoint, plant_config
 from host_tools.flight.harness import run_flight
 from host_tools.flight.vision_camera import VisionCamera, model_option
 from host_tools.maps import PlantationMap, load_map
-from host_tools.sim.cli_args import add_appearance_arguments, appearance_from_args, photo_summary
+from host_tools.sim.cli_args import (add_appearance_arguments, appearance_from_args, photo_summary,
+                                     refuse_appearance_on_photo_map)
 
 DEMO_MAP = "map1"
 DEMO_SEED = 0
@@ -31,6 +32,8 @@ TAKEOFF_AND_LANDING_S = 10.0
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--out", default="runs/demo", help="output folder (default runs/demo/)")
+    parser.add_argument("--map", default=DEMO_MAP,
+                        help="map file or built-in map (default %s; a photo map flies over its photo)" % DEMO_MAP)
     parser.add_argument("--seed", type=argtypes.seed, default=DEMO_SEED, help="seed of every random choice (default 0)")
     parser.add_argument("--model", metavar="M", default=None,
                         help="the module runs with this model file (.npz) (default: the oil palm model)")
@@ -77,10 +80,11 @@ class _Bar:
         self.stream.flush()
 
 
-def fly_demo(seed: int = DEMO_SEED, camera: VisionCamera | None = None, **run_kwargs: Any) -> dict:
-    """The demo's flight (Map 1, the vision camera, the default options unless given): its summary. README's
-    demo output is generated from it (``make docs``)."""
-    pmap = load_map(DEMO_MAP)
+def fly_demo(seed: int = DEMO_SEED, camera: VisionCamera | None = None, pmap: PlantationMap | None = None,
+             **run_kwargs: Any) -> dict:
+    """The demo's flight (Map 1 unless ``pmap``, the vision camera, the default options unless given): its
+    summary. README's demo output is generated from it (``make docs``)."""
+    pmap = pmap if pmap is not None else load_map(DEMO_MAP)
     camera = camera if camera is not None else VisionCamera(pmap, seed=seed)
     return run_flight(pmap, camera, seed=seed, **run_kwargs)
 
@@ -90,8 +94,9 @@ def run(args: argparse.Namespace) -> int:
     plant_config(args.plant, None)  # the firmware plant is built, or one line saying how
     if args.crtp:
         check_crtp_endpoint(args.crtp)
-    pmap = load_map(DEMO_MAP)
-    spec, _ = appearance_from_args(args, {t.species for t in pmap.trees}, "map %s" % DEMO_MAP)
+    pmap = load_map(args.map)
+    spec, _ = appearance_from_args(args, {t.species for t in pmap.trees}, "map %s" % args.map)
+    refuse_appearance_on_photo_map(spec, pmap, args.map)
     model = model_option(args.model) if args.model is not None else None
     print("ForaNav demo: %s" % pmap.name)
     print("  camera: simulator -> JeVois module (ForaNavTrees, unchanged) -> pty -> Crazyflie app (pyserial)")
@@ -105,7 +110,7 @@ def run(args: argparse.Namespace) -> int:
     options = {"plant": args.plant}
     if args.crtp:
         options["crtp"] = args.crtp
-    summary = fly_demo(args.seed, camera, out_dir=out, progress=bar, options=options)
+    summary = fly_demo(args.seed, camera, pmap, out_dir=out, progress=bar, options=options)
     bar.finish(summary["mission_time_s"])
     summary.pop("cpu_s", None)
     print()

@@ -73,6 +73,12 @@ def check_image_bytes(data: bytes, name: str) -> None:
 
 def read_image(path: str | Path) -> np.ndarray:
     """A BGR image (uint8, 3 channels) from a file, checked as the module docstring says."""
+    return read_image_file(path)[1]
+
+
+def read_image_file(path: str | Path) -> tuple[bytes, np.ndarray]:
+    """The file's bytes and its BGR image (uint8, 3 channels), checked as the module docstring says (the bytes
+    for a checksum of exactly what was decoded)."""
     path = Path(path)
     try:
         if path.is_dir():
@@ -92,4 +98,4 @@ def read_image(path: str | Path) -> np.ndarray:
         image = None
     if image is None:
         raise ForaNavError("%s: not an image OpenCV can decode" % path)
-    return image
+    return data, image

@@ -14,6 +14,10 @@ A map is a JSON object:
     target_species  str      optional: the species the mission targets (default oil_palm)
     row_spacing_m   number   optional: centre-to-centre distance between adjacent planting rows (m); the app
                              takes it as app.rowSpacing and its column rule never reaches past half of it
+    photo           object   optional: the world is this photograph (a photo map, docs/photo-flights.md):
+                             {path, sha256, metres_per_pixel, width_px, height_px}; ``path`` is relative to
+                             the map file's folder; the photo's centre is the world origin, photo up is world
+                             +x and photo left is world +y; trees are its annotated crowns, nothing is drawn
 
 Coordinates lie within +-MAX_COORDINATE_M (1000 m), crown_m and size_m are at most MAX_SIZE_M (5 m).
 
@@ -21,12 +25,18 @@ Coordinates lie within +-MAX_COORDINATE_M (1000 m), crown_m and size_m are at mo
 species is the target species and the tree lies within ``COLUMN_RULE_FACTOR`` x ``crown_m`` of a path segment
 (the paper's planting-column rule).
 
+``load_map`` checks a photo map's photo: it must exist and have the checksum the map was written with (a
+photo moved or changed since is refused).
+
 Bad files raise ForaNavError with one line naming the file and the field, e.g.
 ``maps/x.json: trees[2].crown_m: must be a positive number``.
 """
+import hashlib
 import math
 import os
+import re
 from collections.abc import Sequence
+import dataclasses
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -75,6 +85,32 @@ class WorldObject:
 
 
 @dataclass(frozen=True)
+class PhotoGround:
+    """The photograph a photo map's world is: centred on the world origin, photo up = world +x."""
+    path: str  # as written in the map: relative to the map file's folder
+    sha256: str  # hex digest of the photo file's bytes when the map was written
+    metres_per_pixel: float  # ground size of one photo pixel
+    width_px: int
+    height_px: int
+    resolved: str = field(default="", compare=False)  # the file it names (set by load_map)
+
+    @property
+    def extent_m(self) -> tuple[float, float, float, float]:
+        """(x_min, x_max, y_min, y_max) of the photo in world metres."""
+        half_x, half_y = self.height_px * self.metres_per_pixel / 2, self.width_px * self.metres_per_pixel / 2
+        return -half_x, half_x, -half_y, half_y
+
+    def pixel_to_world(self, col: float, row: float) -> Point:
+        """World (x, y) of a continuous photo pixel (col, row)."""
+        return ((self.height_px / 2.0 - row) * self.metres_per_pixel,
+                (self.width_px / 2.0 - col) * self.metres_per_pixel)
+
+    def world_to_pixel(self, x: float, y: float) -> tuple[float, float]:
+        """Continuous photo pixel (col, row) of world (x, y)."""
+        return self.width_px / 2.0 - y / self.metres_per_pixel, self.height_px / 2.0 - x / self.metres_per_pixel
+
+
+@dataclass(frozen=True)
 class PlantationMap:
     name: str
     altitude_m: float
@@ -85,6 +121,7 @@ class PlantationMap:
     target_species: str = "oil_palm"
     source: str = field(default="", compare=False)
     row_spacing_m: float = 0.0  # 0: the map does not give it
+    photo: PhotoGround | None = None
 
     @property
     def targets(self) -> tuple[Tree, ...]:
@@ -189,7 +226,7 @@ def map_from_dict(data: dict, source: str = "<map>") -> PlantationMap:
     """Validate a decoded JSON object and build a PlantationMap."""
     c = _Checker(source)
     c.fields(data, "", ("name", "altitude_m", "waypoints", "trees"),
-             ("objects", "seed", "target_species", "row_spacing_m"))
+             ("objects", "seed", "target_species", "row_spacing_m", "photo"))
     name = c.string(data, "name", "")
     if len(name) > MAX_NAME_CHARS:
         c.fail("name", "a name of %d characters; at most %d" % (len(name), MAX_NAME_CHARS))
@@ -246,8 +283,59 @@ def map_from_dict(data: dict, source: str = "<map>") -> PlantationMap:
         objects.append(WorldObject(c.string(o, "kind", where, OBJECT_KINDS), c.coordinate(o, "x", where),
                                    c.coordinate(o, "y", where), c.size(o, "size_m", where),
                                    c.number(o, "yaw_deg", where) if "yaw_deg" in o else 0.0))
+    photo = _photo(c, data["photo"]) if "photo" in data else None
     return PlantationMap(name, altitude, waypoints, tuple(trees), tuple(objects), seed, target_species, source,
-                         row_spacing)
+                         row_spacing, photo)
+
+
+SHA256_HEX = re.compile(r"^[0-9a-f]{64}$")
+MAX_PHOTO_SIDE_PX = 65536  # annotations.MAX_BOX_PX: no photo we read is larger
+
+
+def _photo(c: _Checker, data: object) -> PhotoGround:
+    where = "photo."
+    c.fields(data, where, ("path", "sha256", "metres_per_pixel", "width_px", "height_px"))
+    path = c.string(data, "path", where)
+    if not path:
+        c.fail(where + "path", "must not be empty")
+    digest = c.string(data, "sha256", where)
+    if not SHA256_HEX.match(digest):
+        c.fail(where + "sha256", "must be 64 lower-case hex digits")
+    mpp = c.number(data, "metres_per_pixel", where, positive=True)
+    sides = []
+    for key in ("width_px", "height_px"):
+        value = c.integer(data, key, where)
+        if not 1 <= value <= MAX_PHOTO_SIDE_PX:
+            c.fail(where + key, "must be from 1 to %d, got %d" % (MAX_PHOTO_SIDE_PX, value))
+        sides.append(value)
+    if max(sides) * mpp / 2 > MAX_COORDINATE_M:
+        c.fail(where + "metres_per_pixel", "the photo would reach beyond +-%g m" % MAX_COORDINATE_M)
+    return PhotoGround(path, digest, mpp, sides[0], sides[1])
+
+
+def file_sha256(path: str | os.PathLike) -> str:
+    """Hex SHA-256 of a file's bytes (ForaNavError naming it when it cannot be read)."""
+    digest = hashlib.sha256()
+    try:
+        with open(path, "rb") as handle:
+            for block in iter(lambda: handle.read(1 << 20), b""):
+                digest.update(block)
+    except OSError as err:
+        raise ForaNavError("%s: cannot read: %s" % (path, err.strerror or err))
+    return digest.hexdigest()
+
+
+def resolve_photo(pmap: PlantationMap, map_path: str | os.PathLike) -> PlantationMap:
+    """The map with its photo's file resolved next to the map file and checked against the checksum."""
+    if pmap.photo is None:
+        return pmap
+    photo_path = Path(map_path).resolve().parent / pmap.photo.path
+    if not photo_path.is_file():
+        raise ForaNavError("%s: photo.path: %s not found (moved since the map was written?)" % (map_path, photo_path))
+    if file_sha256(photo_path) != pmap.photo.sha256:
+        raise ForaNavError("%s: photo.sha256: %s has changed since the map was written (checksum differs)"
+                           % (map_path, photo_path))
+    return dataclasses.replace(pmap, photo=dataclasses.replace(pmap.photo, resolved=str(photo_path)))
 
 
 def map_to_dict(pmap: PlantationMap) -> dict:
@@ -261,6 +349,12 @@ def map_to_dict(pmap: PlantationMap) -> dict:
     data["target_species"] = pmap.target_species
     if pmap.row_spacing_m > 0.0:  # only when given: maps without it keep their bytes
         data["row_spacing_m"] = pmap.row_spacing_m
+    if pmap.photo is not None:
+        photo = asdict(pmap.photo)
+        # a loaded map handed on (a sweep's worker, the realtime camera process, a clip) names the file it
+        # was checked against; a map written by `foranav plantation` names it relative to its own folder
+        photo["path"] = photo.pop("resolved") or photo["path"]
+        data["photo"] = photo
     return data
 
 
@@ -284,7 +378,7 @@ def load_map(name_or_path: str | os.PathLike) -> PlantationMap:
     """Load and validate a map file (or a built-in map by name)."""
     path = resolve_map_path(name_or_path)
     data = fileio.read_json(path, "map file", parse_constant=lambda c: float("nan"))
-    return map_from_dict(data, str(path))
+    return resolve_photo(map_from_dict(data, str(path)), path)
 
 
 def save_map(pmap: PlantationMap, path: str | os.PathLike) -> None:

@@ -53,7 +53,8 @@ from host_tools.flight.realtime import run_realtime
 from host_tools.flight.registry import FPS_RANGE, PIXEL_NOISE_RANGE_PX, WIND_RANGE_MPS2, PLANTS, POSITIONINGS, check_options, plant_model_options
 from host_tools.flight.vision_camera import model_option
 from host_tools.maps import load_map, path_length_m
-from host_tools.sim.cli_args import add_appearance_arguments, appearance_from_args, appearance_spec_from_args
+from host_tools.sim.cli_args import (add_appearance_arguments, appearance_from_args, appearance_spec_from_args,
+                                     refuse_appearance_on_photo_map)
 
 CAMERA_CHOICES = ("oracle", "sim")
 APP_CHOICES = ("python", "c")
@@ -258,7 +259,11 @@ def run(args: argparse.Namespace) -> int:
     if args.hide_tree is not None and args.hide_tree not in {tree.id for tree in pmap.trees}:
         raise ForaNavError("--hide-tree: map %s has no tree %d (its trees: %s)" % (
             args.map, args.hide_tree, ", ".join(str(tree.id) for tree in pmap.trees)))
+    if args.hide_tree is not None and pmap.photo is not None:
+        raise ForaNavError("--hide-tree: map %s is a photo map: a photographed crown cannot be taken away "
+                           "(there is no ground under it)" % args.map)
     spec, _ = appearance_from_args(args, {t.species for t in pmap.trees}, "map %s" % args.map)
+    refuse_appearance_on_photo_map(spec, pmap, args.map)
     if (not spec.default or args.model is not None) and args.camera != "sim":
         raise ForaNavError("--crowns/--ground/--model: only with --camera sim (the oracle sees no pixels)")
     kwargs = camera_kwargs(args)

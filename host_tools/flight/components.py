@@ -101,6 +101,13 @@ class FlightRig:
         t = self.cf.model.truth
         return (t.x, t.y, t.z, t.yaw)
 
+    def camera_pose(self) -> tuple[float, float, float, float, float, float]:
+        """The true pose the camera sees from: (x, y, z, yaw, roll, pitch), degrees, pitch in the stateEstimate
+        sign. The reduced plant flies level (roll = pitch = 0: the nadir frames); the firmware plant's body
+        tilts, and the rendered view tilts with it (host_tools.sim.camera.Pose)."""
+        t = self.cf.model.truth
+        return (t.x, t.y, t.z, t.yaw, t.roll, t.pitch)
+
     def camera_ground_point(self) -> tuple[float, float]:
         x, y, z, yaw = self.true_pose()
         ox, oy = rotate(yaw, *self.mount)
@@ -303,7 +310,7 @@ class CameraFeed:
         opts = self.options
         self.hide.update(now)
         lines = [line.encode("ascii", "replace") if isinstance(line, str) else bytes(line)
-                 for line in self.camera.capture(now, self.rig.true_pose(), hidden=self.hide.hidden_ids(now))]
+                 for line in self.camera.capture(now, self.rig.camera_pose(), hidden=self.hide.hidden_ids(now))]
         if opts["dropout"] > 0:
             lines = [line for line in lines
                      if not line.startswith((b"T2", b"N2")) or self.rng.random() >= opts["dropout"]]

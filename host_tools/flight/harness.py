@@ -6,8 +6,9 @@ telemetry, scoring. ``run_flight`` is the interface the flight commands (fly, pa
 ``camera`` is any object with ``frame_period_ms``, ``latency_ms`` and
 ``capture(t_ms, true_pose, hidden=frozenset()) -> list[str]`` (the serial lines of one frame, without line
 ends; the harness adds CRLF and delivers them ``latency_ms`` later). ``true_pose`` is the MAV's true
-(x, y, z, yaw_deg); the camera applies its own mount offset (optional attribute ``mount_offset`` = (forward,
-left) m, used for scoring; default: the app's camOffset params). ``hidden`` is the set of tree ids the camera
+(x, y, z, yaw_deg, roll_deg, pitch_deg: FlightRig.camera_pose; roll and pitch are 0 on the reduced plant);
+the camera applies its own mount offset (optional attribute ``mount_offset`` = (forward, left) m, used for
+scoring; default: the app's camOffset params). ``hidden`` is the set of tree ids the camera
 must not see at that moment (fault injection).
 
 Simulated time only: the harness runs the firmware scheduler tick by tick, writes each frame's bytes into

@@ -45,11 +45,12 @@ class OracleCamera:
         self._rng = np.random.default_rng(seed)
 
     def ground_point(self, true_pose: Sequence[float]) -> tuple[float, float]:
-        return self.camera.ground_point(Pose(*true_pose))
+        return self.camera.ground_point(Pose(*true_pose[:4]))
 
     def project(self, tree_x: float, tree_y: float, true_pose: Sequence[float]) -> tuple[float, float]:
-        """Pixel (u, v) of a ground point seen from ``true_pose`` (x, y, z, yaw_deg)."""
-        return self.camera.world_to_pixel(Pose(*true_pose), tree_x, tree_y)
+        """Pixel (u, v) of a ground point seen from ``true_pose`` (x, y, z, yaw_deg; the oracle stays a nadir
+        camera: it reports where the tree is under the MAV, whatever the body's tilt)."""
+        return self.camera.world_to_pixel(Pose(*true_pose[:4]), tree_x, tree_y)
 
     def visible(self, true_pose: Sequence[float],
                 hidden: Collection[int] = frozenset()) -> list[tuple[Tree, float, float]]:

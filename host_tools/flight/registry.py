@@ -30,12 +30,13 @@ WIND_RANGE_MPS2 = (0.0, 20.0)  # gusts: 2 g, far past what the plant flies
 
 
 class Camera(Protocol):
-    """What the harness asks of a camera (see the harness docstring); ``mount_offset`` is optional."""
+    """What the harness asks of a camera (see the harness docstring); ``mount_offset`` is optional.
+    ``true_pose`` is (x, y, z, yaw, roll, pitch) (``FlightRig.camera_pose``); a camera may use the first four."""
 
     frame_period_ms: int
     latency_ms: int
 
-    def capture(self, t_ms: int, true_pose: tuple[float, float, float, float],
+    def capture(self, t_ms: int, true_pose: tuple[float, ...],
                 hidden: frozenset[int] = frozenset()) -> list[str]: ...
 
 

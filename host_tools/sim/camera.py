@@ -21,11 +21,19 @@ SENSOR_MODES = ((352, 288), (640, 480), (1280, 1024), (320, 240))  # JeVois-A33 
 
 
 class Pose(NamedTuple):
-    """MAV pose: position in the world frame (metres) and yaw (degrees, counter-clockwise from +x)."""
+    """MAV pose: position in the world frame (metres), yaw (degrees, counter-clockwise from +x) and the body's
+    tilt: roll (degrees, right-handed about body x: positive rolls the left side up) and pitch (degrees, the
+    Crazyflie's stateEstimate sign: positive is nose up). Roll and pitch zero: the nadir camera of the paper."""
     x: float
     y: float
     z: float
     yaw_deg: float = 0.0
+    roll_deg: float = 0.0
+    pitch_deg: float = 0.0
+
+    @property
+    def tilted(self) -> bool:
+        return self.roll_deg != 0.0 or self.pitch_deg != 0.0
 
 
 def sensor_mode(text: str) -> tuple[int, int]:
@@ -91,6 +99,11 @@ class CameraModel:
 
     def world_to_pixel(self, pose: Pose, x: Coordinate, y: Coordinate) -> tuple[Coordinate, Coordinate]:
         """Pixel (u, v) of the ground point (x, y); works on scalars and numpy arrays."""
+        if pose.tilted:
+            to_pixel = np.linalg.inv(self.pixel_to_world_homography(pose))
+            xs, ys = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+            h = to_pixel @ np.stack([xs.ravel(), ys.ravel(), np.ones(xs.size)])
+            return _scalar((h[0] / h[2]).reshape(xs.shape)), _scalar((h[1] / h[2]).reshape(xs.shape))
         gx, gy = self.ground_point(pose)
         dx = np.asarray(x, dtype=float) - gx
         dy = np.asarray(y, dtype=float) - gy
@@ -112,6 +125,35 @@ class CameraModel:
             [s * scale, -c * scale, gx + c * hh * scale - s * hw * scale],
             [-c * scale, -s * scale, gy + s * hh * scale + c * hw * scale],
         ])
+
+
+    def pixel_to_world_homography(self, pose: Pose) -> np.ndarray:
+        """3x3 matrix H with [x, y, 1] ~ H @ [u, v, 1]: the ground plane seen by the camera tilted with the body.
+
+        The ray of pixel (u, v) in the body frame (forward, left, up) is ((H/2 - v) / f, (W/2 - u) / f, -1);
+        the body's rotation R = Rz(yaw) Ry(-pitch) Rx(roll) (pitch in the stateEstimate sign) turns it into
+        the world, and it meets the ground z = 0 from the camera at height z over its ground point (the mount
+        offset turns with yaw only: millimetres at these tilts). With roll = pitch = 0 this is
+        ``pixel_to_world_affine`` exactly.
+        """
+        f = self.focal_px
+        to_ray = np.array([[0.0, -1.0 / f, self.height / 2.0 / f],
+                           [-1.0 / f, 0.0, self.width / 2.0 / f],
+                           [0.0, 0.0, -1.0]])
+        gx, gy = self.ground_point(pose)
+        to_ground = np.array([[pose.z, 0.0, -gx], [0.0, pose.z, -gy], [0.0, 0.0, -1.0]])
+        return to_ground @ body_rotation(pose) @ to_ray
+
+
+def body_rotation(pose: Pose) -> np.ndarray:
+    """Body (forward, left, up) -> world rotation Rz(yaw) Ry(-pitch) Rx(roll); see Pose for the signs."""
+    cy, sy = _cos_sin(pose.yaw_deg)
+    cp, sp = _cos_sin(-pose.pitch_deg)
+    cr, sr = _cos_sin(pose.roll_deg)
+    rz = np.array([[cy, -sy, 0.0], [sy, cy, 0.0], [0.0, 0.0, 1.0]])
+    ry = np.array([[cp, 0.0, sp], [0.0, 1.0, 0.0], [-sp, 0.0, cp]])
+    rx = np.array([[1.0, 0.0, 0.0], [0.0, cr, -sr], [0.0, sr, cr]])
+    return rz @ ry @ rx
 
 
 def _cos_sin(yaw_deg: float) -> tuple[float, float]:

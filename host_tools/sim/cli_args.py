@@ -6,6 +6,7 @@ from pathlib import Path
 
 from host_tools import argtypes
 from host_tools.errors import ForaNavError
+from host_tools.maps import PlantationMap
 from host_tools.sim.camera import HEIGHT_RANGE_M, MOUNT_OFFSET_RANGE_M, CameraModel, SENSOR_MODES
 from host_tools.sim.crowns import Appearance, AppearanceSpec, load_appearance
 from host_tools.sim.world import NO_EFFECTS, SENSOR_EFFECTS, World
@@ -72,6 +73,13 @@ def appearance_from_args(args: argparse.Namespace, species: Iterable[str],
     if appearance is not None:
         appearance.check_species(species, what)
     return spec, appearance
+
+
+def refuse_appearance_on_photo_map(spec: AppearanceSpec, pmap: PlantationMap, map_name: str) -> None:
+    """--crowns/--ground draw trees and ground; a photo map's world is its photo: ForaNavError when both."""
+    if pmap.photo is not None and not spec.default:
+        raise ForaNavError("--crowns/--ground: map %s is a photo map (its world is its photo; nothing is drawn)"
+                           % map_name)
 
 
 def photo_summary(world: World) -> str | None:

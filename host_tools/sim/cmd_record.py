@@ -12,7 +12,8 @@ from host_tools import argtypes, fileio
 from host_tools.errors import ForaNavError
 from host_tools.maps import load_map, map_to_dict
 from host_tools.sim.cli_args import (ALTITUDE_M, EFFECT_PRESETS, add_appearance_arguments, add_camera_arguments,
-                                     appearance_from_args, camera_from_args, photo_summary)
+                                     appearance_from_args, camera_from_args, photo_summary,
+                                     refuse_appearance_on_photo_map)
 from host_tools.sim.clip import DEFAULT_QUALITY, write_clip
 from host_tools.sim.path import path_length, poses_along_path
 from host_tools.sim.world import World
@@ -55,6 +56,7 @@ def run(args: argparse.Namespace) -> int:
         raise ForaNavError("--fps/--speed/--duration: %.0f frames, more than %d (a slower --fps, a faster --speed "
                            "or a --duration)" % (seconds * args.fps, MAX_FRAMES))
     spec, appearance = appearance_from_args(args, {t.species for t in pmap.trees}, "map %s" % args.map)
+    refuse_appearance_on_photo_map(spec, pmap, args.map)
     world = World.from_map(pmap, seed=args.seed, appearance=appearance)
     timed = poses_along_path(pmap.waypoints, args.speed, args.fps, z, args.yaw, args.duration, args.start)
     effects = EFFECT_PRESETS[args.effects]

@@ -14,7 +14,8 @@ from host_tools.errors import ForaNavError
 from host_tools.maps import load_map
 from host_tools.sim.camera import Pose
 from host_tools.sim.cli_args import (ALTITUDE_M, EFFECT_PRESETS, add_appearance_arguments, add_camera_arguments,
-                                     appearance_from_args, camera_from_args, photo_summary)
+                                     appearance_from_args, camera_from_args, photo_summary,
+                                     refuse_appearance_on_photo_map)
 from host_tools.sim.world import World
 
 
@@ -36,6 +37,7 @@ def run(args: argparse.Namespace) -> int:
     camera = camera_from_args(args)
     z = args.z if args.z is not None else pmap.altitude_m
     spec, appearance = appearance_from_args(args, {t.species for t in pmap.trees}, "map %s" % args.map)
+    refuse_appearance_on_photo_map(spec, pmap, args.map)
     world = World.from_map(pmap, seed=args.seed, appearance=appearance)
     frame = world.render(camera, Pose(args.x, args.y, z, args.yaw), effects=EFFECT_PRESETS[args.effects])
     write_png(args.out, frame.image)

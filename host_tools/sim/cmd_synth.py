@@ -17,6 +17,8 @@ library, docs/simulator.md), scaled to the flight camera: crops and frames of re
 --touching RATE: in the scenes' rows each tree touches the previous one with probability RATE (crowns meeting
 on one line, centre distance = sum of the radii + 0-2 cm, as foranav plantation's clusters); default: the
 original scenes (same bytes). 0.15 is the mean of foranav plantation's cluster_rate (docs/simulator.md).
+--photo-maps MAP ...: the scenes are photo maps (foranav plantation --photo): views inside their photos at
+0.8-1.2 x the map's altitude, the photo's boxes as the frames' ground truth (docs/photo-flights.md).
 """
 import argparse
 import csv
@@ -30,7 +32,7 @@ import cv2
 from host_tools import argtypes, fileio
 from host_tools.annotations import Box, format_boxes
 from host_tools.errors import ForaNavError
-from host_tools.maps import SPECIES
+from host_tools.maps import SPECIES, load_map
 from host_tools.sim.cli_args import add_appearance_arguments, appearance_from_args
 from host_tools.sim.dataset import generate
 
@@ -51,6 +53,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--touching", type=argtypes.probability, default=None, metavar="RATE",
                         help="probability that a tree touches the previous one of its row (default: the "
                              "original scenes)")
+    parser.add_argument("--photo-maps", nargs="+", metavar="MAP", default=None,
+                        help="photo maps (foranav plantation --photo): the frames and crops are random views "
+                             "inside their photos, their boxes the ground truth, instead of random plots")
     add_appearance_arguments(parser)
 
 
@@ -59,8 +64,12 @@ def run(args: argparse.Namespace) -> int:
     frame_count = args.count if args.frames is None else args.frames
     species = tuple(dict.fromkeys(args.species or DEFAULT_SPECIES))
     _, appearance = appearance_from_args(args, SPECIES, "the synth scenes")
+    photo_maps = tuple(load_map(m) for m in args.photo_maps or ())
+    for path, pmap in zip(args.photo_maps or (), photo_maps):
+        if pmap.photo is None:
+            raise ForaNavError("--photo-maps %s: not a photo map (no photo field)" % path)
     positives, negatives, frames = generate(args.seed, args.count, frame_count, species, appearance=appearance,
-                                           touching_rate=args.touching)
+                                           touching_rate=args.touching, photo_maps=photo_maps)
     try:
         write_into(Path(args.out), positives, negatives, frames)
     except OSError as err:

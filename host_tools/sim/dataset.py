@@ -29,6 +29,8 @@ FRAMES_PER_SCENE = 8
 WINDOW_FACTOR = (1.15, 1.45)
 CENTRE_JITTER = 0.08  # of the crown box
 NEGATIVE_QUOTAS = (("lookalike", 0.35), ("object", 0.2), ("partial", 0.2), ("background", 0.25))
+PHOTO_NEGATIVE_QUOTAS = (("partial", 0.5), ("background", 0.5))  # a photo of one species has no look-alikes
+PHOTO_HEIGHT_RANGE = (0.8, 1.2)  # views over a photo map: its altitude times this
 PLOT_M = (2.2, 1.8)  # plot size (x, y)
 MAX_SCENES_PER_CROP = 4  # give up (bug guard) if a scene yields far fewer crops than expected
 
@@ -103,12 +105,26 @@ def scene_frames(rng: np.random.Generator, scene: PlantationMap, camera: CameraM
     world = World.from_map(scene, margin_m=0.5, appearance=appearance)
     out = []
     for _ in range(count):
-        pose = Pose(float(rng.uniform(-0.9, 0.9)), float(rng.uniform(-0.7, 0.7)),
-                    scene.altitude_m * float(rng.uniform(0.95, 1.05)),
-                    float(rng.choice([0.0, rng.uniform(-180, 180)])))
+        if scene.photo is not None:
+            pose = photo_pose(rng, scene, camera)
+        else:
+            pose = Pose(float(rng.uniform(-0.9, 0.9)), float(rng.uniform(-0.7, 0.7)),
+                        scene.altitude_m * float(rng.uniform(0.95, 1.05)),
+                        float(rng.choice([0.0, rng.uniform(-180, 180)])))
         frame = world.render(camera, pose, rng=rng, effects=random_effects(rng))
         out.append((frame.image, frame.trees, frame.objects))
     return out
+
+
+def photo_pose(rng: np.random.Generator, scene: PlantationMap, camera: CameraModel) -> Pose:
+    """A random pose over a photo map whose level view lies inside the photo: height the map's
+    x PHOTO_HEIGHT_RANGE, yaw 0 (as the app flies) or any."""
+    z = scene.altitude_m * float(rng.uniform(*PHOTO_HEIGHT_RANGE))
+    x_min, x_max, y_min, y_max = scene.photo.extent_m
+    half = math.hypot(camera.width, camera.height) / 2.0 * camera.metres_per_pixel(z)  # any yaw
+    x = float(rng.uniform(min(0.0, x_min + half), max(0.0, x_max - half)))
+    y = float(rng.uniform(min(0.0, y_min + half), max(0.0, y_max - half)))
+    return Pose(x, y, z, float(rng.choice([0.0, rng.uniform(-180, 180)])))
 
 
 def frame_boxes(trees: Sequence[TreeInView], objects: Sequence[ObjectInView]) -> tuple:
@@ -187,14 +203,17 @@ def negative_group(category: str) -> str:
 
 def generate(seed: int, count: int, frame_count: int, target_species: Sequence[str] = ("oil_palm",),
              camera: CameraModel | None = None, appearance: Appearance | None = None,
-             touching_rate: float | None = None) -> tuple[list, list, list]:
+             touching_rate: float | None = None,
+             photo_maps: Sequence[PlantationMap] = ()) -> tuple[list, list, list]:
     """(positives, negatives, frames): count crops of each class and frame_count annotated frames.
 
-    Deterministic for a seed. ``touching_rate``: see ``random_scene`` (None: the original scenes). ``appearance`` (crowns.Appearance): photo crowns / ground photo for the scenes. Negatives follow NEGATIVE_QUOTAS, topped up from any category when one runs short.
+    Deterministic for a seed. ``photo_maps``: the scenes are these photo maps (random views inside their
+    photos) instead of random plots. ``touching_rate``: see ``random_scene`` (None: the original scenes). ``appearance`` (crowns.Appearance): photo crowns / ground photo for the scenes. Negatives follow NEGATIVE_QUOTAS, topped up from any category when one runs short.
     """
     camera = camera or CameraModel()
     rng = np.random.default_rng([seed & 0xFFFFFFFF, 2024])
-    quotas = {name: int(round(share * count)) for name, share in NEGATIVE_QUOTAS}
+    quotas = {name: int(round(share * count)) for name, share in (PHOTO_NEGATIVE_QUOTAS if photo_maps
+                                                                   else NEGATIVE_QUOTAS)}
     positives, pools, frames = [], {name: [] for name, _ in NEGATIVE_QUOTAS}, []
     frame_index = 0
     max_scenes = MAX_SCENES_PER_CROP * (count + frame_count) + 4
@@ -202,7 +221,10 @@ def generate(seed: int, count: int, frame_count: int, target_species: Sequence[s
         if len(positives) >= count and len(frames) >= frame_count and \
                 all(len(pools[k]) >= quotas[k] for k in quotas):
             break
-        scene = random_scene(rng, tuple(target_species), touching_rate=touching_rate)
+        if photo_maps:  # frames over the photographs, their boxes the ground truth
+            scene = photo_maps[int(rng.integers(len(photo_maps)))]
+        else:
+            scene = random_scene(rng, tuple(target_species), touching_rate=touching_rate)
         for image, trees, objects in scene_frames(rng, scene, camera, FRAMES_PER_SCENE, appearance):
             if len(frames) < frame_count:
                 frames.append(AnnotatedFrame(image, frame_boxes(trees, objects)))

@@ -7,7 +7,17 @@ tree and object in view. Same map seed + pose (+ rng seed when effects are on) =
 
 Mosaic layout: image up is world +x and image left is world +y (what a camera at yaw 0 sees), so the
 mosaic pixel of world (x, y) is ((y_max - y) / mpp, (x_max - x) / mpp) in continuous coordinates.
+
+A photo map's world (``maps.PhotoGround``) is the photograph itself: no ground is drawn and no crown pasted;
+the photo (checked against the map's checksum) is the finest level, area-averaged down to twice the camera's
+ground resolution at the map altitude when it is finer than that, and outside it the frame shows the no-data
+colour ``NO_DATA_BGR`` (never invented texture).
+
+Attitude: a pose with roll or pitch (the firmware plant's true body attitude) is rendered through the ground
+plane's homography (``CameraModel.pixel_to_world_homography``, one ``cv2.warpPerspective``); a level pose
+takes the affine warp, so the nadir frames keep their bytes.
 """
+import hashlib
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -16,9 +26,10 @@ from typing import NamedTuple
 import cv2
 import numpy as np
 
+from host_tools import images
 from host_tools.sim import broadleaf, crowns, ground, objects, palms
 from host_tools.errors import ForaNavError
-from host_tools.maps import SPECIES, PlantationMap, Tree
+from host_tools.maps import SPECIES, PhotoGround, PlantationMap, Tree
 from host_tools.sim.camera import METRES_PER_PIXEL_PER_METRE_AT_352, CameraModel, Pose
 from host_tools.sim.sprite import Sprite, composite, darken
 
@@ -27,6 +38,7 @@ LEVELS = 4  # finest + 3 halvings: good down to 1/8 the resolution (8x the altit
 # the whole ground is rendered at once, ~45 bytes per finest pixel while it is built (float ground, strokes,
 # sprites): a map needing more is refused in one line (a map 1 km long once asked numpy for terabytes)
 MAX_MOSAIC_PIXELS = 100 * 10 ** 6
+NO_DATA_BGR = (0, 0, 0)  # outside a photo map's photo: black, as a GIS viewer shows no-data
 SHADOW_STRENGTH = 0.45
 TREE_HEIGHT_PER_CROWN = 0.5  # model trees: height about half the crown diameter (sets the shadow length)
 
@@ -140,8 +152,9 @@ class World:
 
     def __init__(self, pmap: PlantationMap, levels: list[np.ndarray], bounds: tuple[float, float, float, float],
                  metres_per_pixel: float, seed: int, lighting: Lighting, object_corners: list,
-                 photo_crowns: dict | None = None):
+                 photo_crowns: dict | None = None, no_data: bool = False):
         self.map = pmap
+        self.no_data = no_data  # outside the mosaic: the no-data colour (a photo), else mirrored ground
         self.levels = levels  # [uint8 HxWx3], finest first, each half the previous
         self.bounds = bounds  # (x_min, x_max, y_min, y_max) metres
         self.metres_per_pixel = metres_per_pixel  # of the finest level
@@ -175,6 +188,8 @@ class World:
         """
         seed = pmap.seed if seed is None else int(seed)
         mpp = metres_per_pixel or METRES_PER_PIXEL_PER_METRE_AT_352 * pmap.altitude_m / SUPERSAMPLING
+        if pmap.photo is not None:
+            return cls.from_photo(pmap, mpp, seed)
         bounds = _bounds(pmap, margin_m)
         x_min, x_max, y_min, y_max = bounds
         multiple = 2 ** (LEVELS - 1)
@@ -207,6 +222,21 @@ class World:
         return cls(pmap, levels, bounds, mpp, seed, lighting, corners,
                    {tree_id: crown.source for tree_id, (crown, _) in photos.items()})
 
+    @classmethod
+    def from_photo(cls, pmap: PlantationMap, metres_per_pixel: float, seed: int = 0) -> "World":
+        """The world of a photo map: its photo (no drawing), at most ``metres_per_pixel`` fine."""
+        photo = pmap.photo
+        image = read_photo(photo, pmap.source or pmap.name)
+        mpp = photo.metres_per_pixel
+        if mpp < metres_per_pixel:  # finer than the camera will ever use at this altitude: area-average it down
+            width = max(1, int(round(photo.width_px * mpp / metres_per_pixel)))
+            height = max(1, int(round(photo.height_px * mpp / metres_per_pixel)))
+            image = cv2.resize(image, (width, height), interpolation=cv2.INTER_AREA)
+            mpp = photo.width_px * photo.metres_per_pixel / width
+        x_min, x_max, y_min, y_max = photo.extent_m
+        bounds = (x_max - image.shape[0] * mpp, x_max, y_max - image.shape[1] * mpp, y_max)
+        return cls(pmap, _pyramid(image), bounds, mpp, seed, Lighting(1.0, (0.7, -0.7), 0.0), [], no_data=True)
+
     # ---- camera frames -------------------------------------------------------------------------------
 
     def render(self, camera: CameraModel, pose: Pose, rng: np.random.Generator | None = None,
@@ -219,9 +249,16 @@ class World:
         if not pose.z > 0:
             raise ValueError("camera height must be positive, got %r" % (pose.z,))
         level, mpp = self._level_for(camera.metres_per_pixel(pose.z))
-        matrix = self._camera_to_mosaic(camera, pose, mpp)
-        image = cv2.warpAffine(self.levels[level], matrix, (camera.width, camera.height),
-                               flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP, borderMode=cv2.BORDER_REFLECT_101)
+        border = dict(borderMode=cv2.BORDER_CONSTANT, borderValue=NO_DATA_BGR) if self.no_data else \
+            dict(borderMode=cv2.BORDER_REFLECT_101)
+        if pose.tilted:
+            image = cv2.warpPerspective(self.levels[level], self._camera_to_mosaic_homography(camera, pose, mpp),
+                                        (camera.width, camera.height), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
+                                        **border)
+        else:
+            matrix = self._camera_to_mosaic(camera, pose, mpp)
+            image = cv2.warpAffine(self.levels[level], matrix, (camera.width, camera.height),
+                                   flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP, **border)
         if effects.active:
             image = effects.apply(image, rng if rng is not None else np.random.default_rng(self.seed))
         return Frame(image, pose, self.trees_in_view(camera, pose), self.objects_in_view(camera, pose))
@@ -268,10 +305,32 @@ class World:
         m[:, 2] += m[:, :2] @ np.array([0.5, 0.5]) - 0.5
         return m
 
+    def _camera_to_mosaic_homography(self, camera, pose, level_mpp):
+        """3x3 matrix: camera pixel index -> mosaic level pixel index through the tilted camera's ground plane."""
+        x_max, y_max = self.bounds[1], self.bounds[3]
+        to_mosaic = np.array([[0.0, -1.0 / level_mpp, y_max / level_mpp],
+                              [-1.0 / level_mpp, 0.0, x_max / level_mpp], [0.0, 0.0, 1.0]])
+        index_to_continuous = np.array([[1.0, 0.0, 0.5], [0.0, 1.0, 0.5], [0.0, 0.0, 1.0]])
+        continuous_to_index = np.array([[1.0, 0.0, -0.5], [0.0, 1.0, -0.5], [0.0, 0.0, 1.0]])
+        return continuous_to_index @ to_mosaic @ camera.pixel_to_world_homography(pose) @ index_to_continuous
+
     def mosaic_pixel(self, x: float, y: float, level: int = 0) -> tuple[float, float]:
         """Continuous mosaic pixel (col, row) of world (x, y) at a level (for pictures and tests)."""
         mpp = self.metres_per_pixel * 2 ** level
         return (self.bounds[3] - y) / mpp, (self.bounds[1] - x) / mpp
+
+
+def read_photo(photo: PhotoGround, map_name: str) -> np.ndarray:
+    """The photo of a photo map, refused unless its bytes are the ones the map was written with."""
+    path = photo.resolved or photo.path
+    data, image = images.read_image_file(path)
+    if hashlib.sha256(data).hexdigest() != photo.sha256:
+        raise ForaNavError("%s: photo.sha256: %s has changed since the map was written (checksum differs)"
+                           % (map_name, path))
+    if image.shape[:2] != (photo.height_px, photo.width_px):
+        raise ForaNavError("%s: photo: %s is %dx%d px, the map says %dx%d" % (map_name, path, image.shape[1],
+                           image.shape[0], photo.width_px, photo.height_px))
+    return image
 
 
 def _draw_map(image, pmap, seed, mpp, bounds, lighting, photos=None, photo_shadows=False):

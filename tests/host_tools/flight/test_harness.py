@@ -148,7 +148,7 @@ def test_that_any_object_with_the_camera_interface_can_fly():
     assert summary["missed_targets"] == summary["targets"]
     times = [c[0] for c in camera.calls]
     assert times[:3] == [0, 200, 400]
-    assert all(len(c[1]) == 4 for c in camera.calls)
+    assert all(len(c[1]) == 6 and c[1][4:] == (0.0, 0.0) for c in camera.calls)  # the reduced plant flies level
     assert [c[2] for c in camera.calls if 1000 <= c[0] < 2000] == [frozenset([1])] * 5
     assert all(c[2] == frozenset() for c in camera.calls if c[0] >= 2000)
 

@@ -63,3 +63,17 @@ def test_that_the_mount_offset_moves_the_ground_point_with_yaw():
 def test_that_an_unknown_sensor_mode_is_rejected():
     with pytest.raises(ValueError):
         CameraModel(300, 200)
+
+
+def test_that_the_homography_is_the_affine_map_when_level_and_inverts_world_to_pixel_when_tilted():
+    camera = CameraModel(mount_offset=(0.02, -0.01))
+    level = Pose(1.0, 2.0, 1.3, 33.0)
+    h = camera.pixel_to_world_homography(level)
+    assert np.allclose(h / h[2, 2], np.vstack([camera.pixel_to_world_affine(level), [0, 0, 1]]), atol=1e-12)
+    tilted = Pose(1.0, 2.0, 1.3, 33.0, 5.0, -4.0)
+    u, v = camera.world_to_pixel(tilted, np.array([1.2, 0.8]), np.array([2.1, 2.3]))
+    back = camera.pixel_to_world_homography(tilted) @ np.stack([u, v, np.ones(2)])
+    assert np.allclose(back[:2] / back[2], [[1.2, 0.8], [2.1, 2.3]], atol=1e-9)
+    # roll positive (left side up) turns the belly to the left: the frame centre sees ground to the left (+y)
+    centre = camera.pixel_to_world_homography(Pose(0.0, 0.0, 1.0, 0.0, 10.0, 0.0)) @ [176.0, 144.0, 1.0]
+    assert centre[1] / centre[2] == pytest.approx(np.tan(np.radians(10.0)) - 0.01, abs=1e-9)

@@ -95,3 +95,32 @@ def test_that_objects_are_reported_in_view():
     assert [o.kind for o in frame.objects] == ["roof"]
     assert frame.objects[0].complete
     assert frame.objects[0].h == pytest.approx(0.4 / 0.0031 / 1.25, rel=0.01)  # long side along x = image up
+
+
+@pytest.mark.parametrize("pose", [Pose(0.3, 0.2, 1.25, 0.0, 4.0, -3.0), Pose(0.45, 0.1, 1.0, 30.0, -6.0, 5.0),
+                                  Pose(0.2, 0.35, 1.6, -120.0, 2.0, 8.0)])
+def test_that_a_tilted_camera_shows_the_ground_point_of_the_ground_plane_homography(pose):
+    # Fixture
+    world = coordinate_world()
+    camera = CameraModel(mount_offset=(0.03, 0.01))
+    # Test
+    image = world.render(camera, pose).image
+    # Assert: each pixel centre reads back the mosaic coordinate of the ground point its ray meets
+    vs, us = np.mgrid[0:camera.height, 0:camera.width] + 0.5
+    h = camera.pixel_to_world_homography(pose) @ np.stack([us.ravel(), vs.ravel(), np.ones(us.size)])
+    col, row = world.mosaic_pixel(h[0] / h[2], h[1] / h[2])
+    assert np.max(np.abs(image[..., 0].ravel() - col)) < WARP_TOLERANCE_PX
+    assert np.max(np.abs(image[..., 1].ravel() - row)) < WARP_TOLERANCE_PX
+
+
+def test_that_a_level_pose_keeps_the_nadir_bytes_and_a_tilt_moves_the_view(map1_world):
+    camera = CameraModel()
+    level = map1_world.render(camera, Pose(1.0, 0.5, 1.25, 10.0)).image
+    assert np.array_equal(map1_world.render(camera, Pose(1.0, 0.5, 1.25, 10.0, 0.0, 0.0)).image, level)
+    # nose up by 5 degrees: the belly, and the camera, turn forward; a tree straight below moves back (down)
+    tree = load_map("map1").trees[0]
+    u0, v0 = camera.world_to_pixel(Pose(tree.x, tree.y, 1.25), tree.x, tree.y)
+    u1, v1 = camera.world_to_pixel(Pose(tree.x, tree.y, 1.25, 0.0, 0.0, 5.0), tree.x, tree.y)
+    assert u1 == pytest.approx(u0) and v1 - v0 == pytest.approx(camera.focal_px * np.tan(np.radians(5.0)), rel=1e-6)
+    pitched = map1_world.render(camera, Pose(1.0, 0.5, 1.25, 10.0, 0.0, 5.0)).image
+    assert not np.array_equal(pitched, level)
