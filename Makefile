@@ -77,6 +77,7 @@ camera-runtime: $(STAMP)
 # docs/reference/*.md from the code (commands, flight app PARAMs, camera module parameters)
 docs: $(STAMP)
 	$(BIN)/python -m host_tools.docs_gen
+	$(BIN)/python -m tests.cross_cutting.test_cli_bad_inputs --write > /dev/null
 
 demo: $(STAMP)
 	$(BIN)/foranav demo

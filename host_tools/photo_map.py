@@ -113,7 +113,7 @@ def build_photo_map(req: PhotoMapRequest) -> PhotoMapResult:
         rows_flown = len(lines)
         spacing = round(fit.row_spacing, 4) if fit.row_spacing is not None else None
     trees = [{"id": i + 1, "x": round(float(x), 4), "y": round(float(y), 4), "species": req.label,
-              "crown_m": round(float(c), 4), "target": app_column_target(float(x), float(y), waypoints)}
+              "crown_m": round(float(c), 4), "target": app_column_target(float(x), float(y), waypoints, spacing or 0.0)}
              for i, ((x, y), c) in enumerate(zip(centres, crowns))]
     raw = {"name": req.name or Path(req.photo).stem, "altitude_m": req.altitude_m,
            "waypoints": [[round(float(x), 4), round(float(y), 4)] for x, y in waypoints], "trees": trees,
@@ -125,12 +125,14 @@ def build_photo_map(req: PhotoMapRequest) -> PhotoMapResult:
                           spacing, tuple(notes))
 
 
-def app_column_target(x: float, y: float, waypoints: list[Point]) -> bool:
+def app_column_target(x: float, y: float, waypoints: list[Point], row_spacing_m: float = 0.0) -> bool:
     """The app's own column rule: within columnFactor x its crownSize (not the photo's crown of that tree: the
-    app knows one crown size) of a segment of the path."""
+    app knows one crown size) of a segment of the path, and never past half the row spacing (app.rowSpacing,
+    which the flight sets from the map's row_spacing_m)."""
     xy = (round(x, 4), round(y, 4))
     path = [(round(float(a), 4), round(float(b), 4)) for a, b in waypoints]
-    return within_column(distance_to_path(xy[0], xy[1], path), APP_PARAMS.crown_size_m, COLUMN_RULE_FACTOR)
+    return within_column(distance_to_path(xy[0], xy[1], path), APP_PARAMS.crown_size_m, COLUMN_RULE_FACTOR,
+                         row_spacing_m)
 
 
 def photo_boxes(csv_path: str, photo: str, label: str, width_px: int, height_px: int) -> list[annotations.Box]:

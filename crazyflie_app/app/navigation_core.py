@@ -216,7 +216,7 @@ class NavigationCore:
         p = self.params
         return [t for t in self.memory.trees.values()
                 if t.hits >= p.min_hits and self.route.in_planting_column(t.x, t.y)
-                and not self.route.behind(t.x, t.y)]
+                and not self.route.behind(t.x, t.y, t.first_ms)]
 
     def _select_target(self, t_ms, pose):
         candidates = self.eligible_trees()
@@ -271,7 +271,7 @@ class NavigationCore:
         self.events.append(Event("tree_reached", t_ms, tree.id, cx, cy,
                                  detail="s_t %.3f %.3f" % (tree.x, tree.y)))
         self._drop_target()
-        self.route.note_reached(cx, cy)
+        self.route.note_reached(cx, cy, t_ms)
         self.route.reanchor(self._row_in_view(t_ms, (cx, cy)))
         return self._after_tree(t_ms, pose)
 

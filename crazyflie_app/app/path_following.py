@@ -69,6 +69,7 @@ class PathFollower:
         self.path = self.planned  # the path flown: the waypoints moved by the offset
         self.waypoint_index = 0  # the waypoint being flown to
         self.progress = None  # along the current segment: where its last tree was reached (m; None: none yet)
+        self.progress_ms = 0  # ... and when
 
     @property
     def finished(self) -> bool:
@@ -120,15 +121,18 @@ class PathFollower:
         length = math.hypot(dx, dy) or 1e-9
         return ((x - a[0]) * dx + (y - a[1]) * dy) / length
 
-    def note_reached(self, x: float, y: float) -> None:
-        """A tree of the current segment was reached with the camera over (x, y)."""
+    def note_reached(self, x: float, y: float, t_ms: int) -> None:
+        """A tree of the current segment was reached with the camera over (x, y) at ``t_ms``."""
         self.progress = self.along(x, y)
+        self.progress_ms = t_ms
 
-    def behind(self, x: float, y: float) -> bool:
-        """(x, y) lies more than ``mergeRadius`` behind the last tree reached on this segment: the row is flown
-        one way, so a tree there was passed, and one first seen there is a reached tree seen again after the
-        estimate drifted past ``mergeRadius`` (``mergeRadius``: a cluster neighbour may stand that close)."""
-        return self.progress is not None and self.along(x, y) < self.progress - self.params.merge_radius_m
+    def behind(self, x: float, y: float, first_ms: int) -> bool:
+        """A tree first seen at ``first_ms`` at (x, y) lies more than ``mergeRadius`` behind the last tree reached
+        on this segment and was first seen after that tree was reached: a reached tree seen again after the
+        estimate drifted past ``mergeRadius`` (``mergeRadius``: a cluster neighbour may stand that close). A tree
+        seen before (one the approach passed, e.g. before the first waypoint) stays a target to go back for."""
+        return (self.progress is not None and first_ms > self.progress_ms
+                and self.along(x, y) < self.progress - self.params.merge_radius_m)
 
     def _segment_index(self) -> int:
         return min(max(self.waypoint_index, 1), len(self.path) - 1)

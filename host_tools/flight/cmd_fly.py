@@ -50,7 +50,9 @@ from host_tools.errors import ForaNavError
 from host_tools.flight import camera_factory, run_flight
 from host_tools.flight.components import check_crtp_endpoint
 from host_tools.flight.realtime import run_realtime
-from host_tools.flight.registry import FPS_RANGE, PIXEL_NOISE_RANGE_PX, WIND_RANGE_MPS2, PLANTS, POSITIONINGS, check_options, plant_model_options
+from host_tools.flight.registry import (FLOW_BIAS_RANGE_COUNTS, FLOW_SCALE_RANGE, FPS_RANGE, GROUND_TEXTURE_RANGE,
+                                       PIXEL_NOISE_RANGE_PX, PLANTS, POSITIONINGS, WIND_RANGE_MPS2, check_options,
+                                       plant_model_options)
 from host_tools.flight.vision_camera import model_option
 from host_tools.maps import load_map, path_length_m
 from host_tools.sim.cli_args import (add_appearance_arguments, appearance_from_args, appearance_spec_from_args,
@@ -102,11 +104,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                              "filter fuses (--estimator is the older name)")
     parser.add_argument("--wind", type=argtypes.float_range(*WIND_RANGE_MPS2), default=0.0,
                         help="wind gust acceleration std (m/s^2)")
-    parser.add_argument("--flow-scale", type=argtypes.float_range(0.5, 2.0), default=None, metavar="K",
+    parser.add_argument("--flow-scale", type=argtypes.float_range(*FLOW_SCALE_RANGE), default=None, metavar="K",
                         help="firmware plant: the Flow deck reports K counts per count of motion (1.05: 5 %% long)")
-    parser.add_argument("--flow-bias", type=argtypes.float_range(0.0, 5.0), default=None, metavar="COUNTS",
+    parser.add_argument("--flow-bias", type=argtypes.float_range(*FLOW_BIAS_RANGE_COUNTS), default=None, metavar="COUNTS",
                         help="firmware plant: counts added to each 10 ms flow frame, x and y")
-    parser.add_argument("--ground-texture", type=argtypes.float_range(0.0, 1.0), default=None, metavar="Q",
+    parser.add_argument("--ground-texture", type=argtypes.float_range(*GROUND_TEXTURE_RANGE), default=None, metavar="Q",
                         help="firmware plant: ground texture for the Flow deck (1 textured .. 0 featureless; "
                              "below 0.5 counts under-read, below 0.35 frames are lost)")
     parser.add_argument("--mavlink", type=argtypes.mavlink_url, help="also stream the telemetry live, e.g. udpout:127.0.0.1:14550")

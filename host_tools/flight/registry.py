@@ -27,6 +27,11 @@ POSITIONINGS = ("uwb", "flow")  # Loco deck + Flow deck, or the Flow deck alone
 FPS_RANGE = (2.0, 120.0)
 PIXEL_NOISE_RANGE_PX = (0.0, 1000.0)  # added to each detection: beyond that no detection lands in a frame
 WIND_RANGE_MPS2 = (0.0, 20.0)  # gusts: 2 g, far past what the plant flies
+# the Flow deck's drift conditions (firmware plant): counts per count of motion, counts added per 10 ms frame,
+# ground texture 1 textured .. 0 featureless
+FLOW_SCALE_RANGE = (0.5, 2.0)
+FLOW_BIAS_RANGE_COUNTS = (0.0, 5.0)
+GROUND_TEXTURE_RANGE = (0.0, 1.0)
 
 
 class Camera(Protocol):

@@ -81,7 +81,7 @@ static NavCommand reached(NavCore* core, int32_t t_ms, const NavPose* pose, cons
     e->b = ty;
   }
   navDropTarget(core);
-  navNoteReached(core, cx, cy);
+  navNoteReached(core, cx, cy, t_ms);
   reanchorOnRow(core, t_ms, cx, cy);
   return navAfterTree(core, t_ms, pose);
 }
@@ -142,7 +142,7 @@ static NavCommand stepApproach(NavCore* core, int32_t t_ms, const NavPose* pose)
 /* A stored tree that may become the target: seen often enough, in the planting column (eligible_trees). */
 static bool eligibleTree(const NavCore* core, int32_t index) {
   const NavTree* t = &core->memory.trees[index];
-  return t->hits >= core->params.min_hits && navInPlantingColumn(core, t->x, t->y) && !navBehind(core, t->x, t->y);
+  return t->hits >= core->params.min_hits && navInPlantingColumn(core, t->x, t->y) && !navBehind(core, t->x, t->y, t->first_ms);
 }
 
 static bool selectTarget(NavCore* core, int32_t t_ms, const NavPose* pose) {

@@ -196,7 +196,8 @@ typedef struct {
   int32_t path_length;
   double offset[2];
   bool has_progress; /* a tree of the current segment was reached ... */
-  double progress;   /* ... this far along it */
+  double progress;   /* ... this far along it ... */
+  int32_t progress_ms; /* ... at this time */
   NavTreeMemory memory;
   NavCounters counters;
   NavPhase phase;

@@ -42,8 +42,9 @@ double navColumnHalfWidth(const NavParams* p);
 void navAdvanceWaypoint(NavCore* core);
 /* Along the current segment from its start (m); progress and the trees behind it (PathFollower.behind). */
 double navAlong(const NavCore* core, double x, double y);
-void navNoteReached(NavCore* core, double x, double y);
-bool navBehind(const NavCore* core, double x, double y);
+void navNoteReached(NavCore* core, double x, double y, int32_t t_ms);
+/* a tree first seen at first_ms, after the last reach of the segment, and behind it: that tree seen again */
+bool navBehind(const NavCore* core, double x, double y, int32_t first_ms);
 /* Re-anchoring (PathFollower.reanchor): the distance of (x, y) across the planned current segment (false: the
  * segment has no length), and the correction from the sum of count such distances. */
 bool navAcrossPlanned(const NavCore* core, double x, double y, double* across);

@@ -59,13 +59,15 @@ double navAlong(const NavCore* core, double x, double y) {
   return ((x - a[0]) * dx + (y - a[1]) * dy) / length;
 }
 
-void navNoteReached(NavCore* core, double x, double y) {
+void navNoteReached(NavCore* core, double x, double y, int32_t t_ms) {
   core->progress = navAlong(core, x, y);
+  core->progress_ms = t_ms;
   core->has_progress = true;
 }
 
-bool navBehind(const NavCore* core, double x, double y) {
-  return core->has_progress && navAlong(core, x, y) < core->progress - core->params.merge_radius_m;
+bool navBehind(const NavCore* core, double x, double y, int32_t first_ms) {
+  return core->has_progress && first_ms > core->progress_ms &&
+         navAlong(core, x, y) < core->progress - core->params.merge_radius_m;
 }
 
 /* the unit normal of the planned current segment (false: no length) */

@@ -361,12 +361,22 @@ def test_that_without_reanchoring_the_drifted_estimate_loses_the_row():
     assert len(world.events("tree_reached")) < len(DRIFT_ROW) - 2
 
 
-def test_that_a_tree_behind_the_last_reached_one_is_not_a_target():
+def test_that_a_tree_first_seen_behind_the_last_reached_one_is_not_a_target():
     core = NavigationCore(NavigationParams(), PATH)
-    core.route.note_reached(2.0, 0.0)
-    assert core.route.behind(1.4, 0.0) and not core.route.behind(1.7, 0.0) and not core.route.behind(2.5, 0.0)
+    core.route.note_reached(2.0, 0.0, 5000)
+    seen_after = 5100
+    assert core.route.behind(1.4, 0.0, seen_after)
+    assert not core.route.behind(1.7, 0.0, seen_after) and not core.route.behind(2.5, 0.0, seen_after)
     core.route.advance()  # 0 -> 1: still the first row
-    assert core.route.behind(1.4, 0.0)
+    assert core.route.behind(1.4, 0.0, seen_after)
+
+
+def test_that_a_tree_seen_before_the_reach_and_passed_stays_a_target():
+    # flight 91 of sweep seed 1100: a palm before the first waypoint, seen on the way in, passed when the next
+    # palm was reached first; it must still be gone back for
+    core = NavigationCore(NavigationParams(), PATH)
+    core.route.note_reached(2.0, 0.0, 5000)
+    assert not core.route.behind(1.4, 0.0, 4000)
 
 
 def test_that_the_first_waypoint_is_passed_from_inside_the_first_row():
