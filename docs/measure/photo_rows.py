@@ -44,7 +44,7 @@ def main(runs, model):
           "| completed |")
     print("|---|---|---|---|---|---|---|")
     totals = dict(flights=0, targets=0, once=0, clean=0)
-    deviations, causes = [], {}
+    deviations, causes, photos_visiting = [], {}, {}
     for name, pmap, summary in flights(runs):
         targets = {t.id for t in pmap.targets}
         reached = [r["id"] for r in summary["reached"]]
@@ -58,6 +58,8 @@ def main(runs, model):
                 cause = miss_cause(pmap, summary, tree_id, camera)
                 causes[cause] = causes.get(cause, 0) + 1
         deviations += own
+        photo = name.rsplit("_r", 1)[0]
+        photos_visiting[photo] = photos_visiting.get(photo, False) or bool(others)
         totals["flights"] += 1
         totals["targets"] += len(targets)
         totals["once"] += once
@@ -70,6 +72,8 @@ def main(runs, model):
           "flights; mean deviation %.3f m over %d reached targets"
           % (totals["flights"], totals["once"], totals["targets"], 100.0 * totals["once"] / max(totals["targets"], 1),
              totals["clean"], totals["flights"], sum(deviations) / max(len(deviations), 1), len(deviations)))
+    print("no non-target visited in %d of %d photos (all their row flights)"
+          % (sum(1 for visited in photos_visiting.values() if not visited), len(photos_visiting)))
     print("misses: %s" % (", ".join("%s %d" % item for item in sorted(causes.items())) or "none"))
     return 0 if n else 1
 
