@@ -137,3 +137,33 @@ def test_that_a_params_cfg_written_before_the_markers_is_read_as_foranavs(tmp_pa
     # Assert: recomputed for 15 fps, nothing kept as the user's
     assert active_lines(sd / PARAMS) == []
     assert active_lines(sd / SCRIPT) == ["setpar serout Hard", "setpar serlog None", "setpar serlimit 40"]
+
+
+def test_that_a_redeploy_keeps_the_users_comment_lines_above_what_they_describe(deployed, capsys):
+    sd, module_dir = deployed
+    edit(sd / PARAMS, "#svmthresh=0.5", "# lower threshold: the canopy is dark here\nsvmthresh=0.25")
+    edit(sd / PARAMS, "#step=8", "# step: try 4 if trees are missed\n#step=8")
+    (sd / PARAMS).write_text((sd / PARAMS).read_text() + "# card of drone 3, 2026-11\n")
+    edit(sd / SCRIPT, "setpar serlog None", "# logs on USB while testing\nsetpar serlog USB")
+    (sd / SCRIPT).write_text((sd / SCRIPT).read_text() + "# show the module's info at start\ninfo\n")
+    assert deploy(sd, module_dir, "--mode", "352x288@30") == 0
+    params = (sd / PARAMS).read_text().splitlines()
+    assert params.index("# lower threshold: the canopy is dark here") < params.index("svmthresh=0.25")
+    assert params.index("# step: try 4 if trees are missed") < params.index("#step=8")
+    assert params[-2:] == ["# Your comments, kept by foranav deploy:", "# card of drone 3, 2026-11"]
+    script = (sd / SCRIPT).read_text().splitlines()
+    assert script.index("# logs on USB while testing") < script.index("setpar serlog USB")
+    assert script.index("# show the module's info at start") == script.index("info") - 1
+    # Each comment once, and a further deploy changes nothing.
+    assert params.count("# lower threshold: the canopy is dark here") == 1
+    before = tree_digest(sd)
+    assert deploy(sd, module_dir, "--mode", "352x288@30") == 0
+    assert tree_digest(sd) == before
+
+
+def test_that_foranavs_own_comments_are_not_taken_for_the_users(deployed):
+    sd, module_dir = deployed
+    fresh = (sd / PARAMS).read_text()
+    assert deploy(sd, module_dir, "--mode", "352x288@60") == 0
+    assert "# Your comments" not in (sd / PARAMS).read_text() + (sd / SCRIPT).read_text()
+    assert (sd / PARAMS).read_text().count("\n") == fresh.count("\n")
