@@ -167,3 +167,17 @@ def test_that_foranavs_own_comments_are_not_taken_for_the_users(deployed):
     assert deploy(sd, module_dir, "--mode", "352x288@60") == 0
     assert "# Your comments" not in (sd / PARAMS).read_text() + (sd / SCRIPT).read_text()
     assert (sd / PARAMS).read_text().count("\n") == fresh.count("\n")
+
+
+def test_that_the_reason_foranav_gave_for_another_mode_is_not_kept_as_a_users_comment(tmp_path):
+    # A module reporting up to 8 trees: at 120 fps ForaNav caps maxtrees and says why; back at 15 fps it does not.
+    sd, module_dir = make_card(tmp_path), make_module_folder(tmp_path / "src")
+    source = (module_dir / "ForaNavTrees.py").read_text()
+    (module_dir / "ForaNavTrees.py").write_text(source.replace(
+        '"window step", foranav_helper.STEP)', '"window step", foranav_helper.STEP)\n'
+        '        self.add(pc, "maxtrees", "int", "trees per frame", 8)'))
+    assert deploy(sd, module_dir, "--mode", "176x144@120") == 0
+    assert "fps the serial port carries" in (sd / PARAMS).read_text()
+    assert deploy(sd, module_dir) == 0
+    text = (sd / PARAMS).read_text()
+    assert "fps the serial port carries" not in text and "# Your comments" not in text
