@@ -4,7 +4,8 @@ and carry the plan out (numbered backups, durable atomic writes: card_fs).
 The plan is computed from the card's current contents, then checked whole against what is on the card (a
 folder where a file goes, a write-protected file, a symlink off the card), all before anything is written, so a
 bad card, a bad module or a damaged config file stops the deploy with nothing changed; `--dry-run` prints the
-same plan and stops. Temporary files an interrupted deploy left are removed first.
+same plan and stops. A write that fails anyway undoes the deploy; temporary files an interrupted deploy left
+are removed after a successful one.
 """
 import os
 import re
@@ -45,6 +46,7 @@ class FileChange:
     data: bytes
     backup: str = None
     detail: tuple = ()
+    old_size: int = 0  # bytes of the file on the card now (what its backup takes)
 
 
 @dataclass(frozen=True)
@@ -82,7 +84,7 @@ def plan_file(state: CardState, path: str, data: bytes, detail: Sequence[str] = 
         return FileChange(path, "create", data, None, tuple(detail))
     if old == data:
         return FileChange(path, "same", data, None, ())
-    return FileChange(path, "update", data, backup_path(path, state.names), tuple(detail))
+    return FileChange(path, "update", data, backup_path(path, state.names), tuple(detail), len(old))
 
 
 def _initscript_changes(state, vendor, module, mode, headless):
@@ -238,36 +240,114 @@ def inspect_plan(root: str | os.PathLike, plan: DeployPlan) -> dict:
     return {path: card_fs.entry(root, path) for path in sorted(paths)}
 
 
+def _blocks(size: int, block: int) -> int:
+    return -(-size // block) * block
+
+
+def bytes_needed(plan: DeployPlan, entries: dict, block: int) -> int:
+    """Pure: the most card space the writes take at once, in whole allocation blocks: every backup and new
+    file, what updated files grow by, the largest temporary file (it sits beside the old file until the
+    rename), one block per new folder, and one block to spare for folder entries."""
+    writes = [change for change in plan.changes if change.action in ("create", "update")]
+    total = sum(_blocks(change.old_size, block) for change in writes if change.action == "update")  # backups
+    total += sum(_blocks(len(change.data), block) for change in writes if change.action == "create")
+    total += sum(max(0, _blocks(len(change.data), block) - _blocks(change.old_size, block))
+                 for change in writes if change.action == "update")
+    total += max((_blocks(len(change.data), block) for change in writes if change.action == "update"), default=0)
+    new_folders = {folder for change in writes for folder in _parents(change.path)
+                   if entries.get(folder, card_fs.Entry("folder")).kind == "missing"}
+    return total + (len(new_folders) + 1) * block if writes else 0
+
+
+def check_space(plan: DeployPlan, entries: dict, free: int, block: int, shown_root: str | os.PathLike) -> None:
+    """Pure: ForaNavError naming the card, the bytes needed and the bytes free when the writes do not fit."""
+    needed = bytes_needed(plan, entries, block)
+    if needed > free:
+        count = len(changed_paths(plan))
+        raise ForaNavError("--sd %s: not enough space on the card: deploy needs %d bytes (%d file%s and their "
+                           "backups), %d bytes are free; free %d bytes (old .foranav-bak-<n> backups?) and deploy "
+                           "again" % (shown_root, needed, count, "" if count == 1 else "s", free, needed - free))
+
+
 def preflight(root: str | os.PathLike, plan: DeployPlan, force: bool) -> None:
-    """Adapter: everything the writes need is checked before the first one (see check_plan)."""
-    check_plan(plan, inspect_plan(root, plan), force, root)
+    """Adapter: everything the writes need is checked before the first one (see check_plan), the card's free
+    space included (see check_space)."""
+    entries = inspect_plan(root, plan)
+    check_plan(plan, entries, force, root)
+    free, block = card_fs.free_space(card_fs.real_root(root))
+    check_space(plan, entries, free, block, root)
+
+
+@dataclass
+class _Written:
+    """What apply_plan has done so far, to undo it when a write fails."""
+    backups: list
+    created: list
+    updated: list  # (path, backup)
+    folders: list
+
+
+def _undo(root: Path, done: _Written) -> list[str]:
+    """Put the card back as it was before the deploy: each updated file from its backup, then remove the files
+    and folders the deploy made. Returns the paths it could not restore."""
+    left = []
+    for path, backup in reversed(done.updated):
+        try:
+            card_fs.restore_file(root, backup, path)
+            done.backups.remove(backup)
+        except OSError:
+            left.append(path)
+    for path in reversed(done.created + done.backups):
+        try:
+            card_fs.remove_file(root, path)
+        except OSError:
+            left.append(path)
+    for folder in reversed(done.folders):
+        try:
+            card_fs.remove_folder(folder)
+        except OSError:
+            left.append(str(folder.relative_to(root)) + "/")
+    return left
 
 
 def apply_plan(root: str | os.PathLike, plan: DeployPlan) -> None:
-    """Adapter: remove stray temporary files, back up every file that changes, then write the new contents
-    durably, in plan order."""
+    """Adapter: back up every file that changes, write the new contents durably in plan order, then remove the
+    stray temporary files. A write that fails anyway (the card filled up under us, was pulled) undoes
+    everything this deploy wrote, so the card is as it was: never half a module."""
     shown, root = root, card_fs.real_root(root)
     if not os.access(str(root), os.W_OK):
         raise ForaNavError("--sd %s: the card is not writable (mounted read-only?)" % shown)
-    done = []
+    done = _Written([], [], [], [])
+    current = None
     try:
         for change in plan.changes:
-            if change.action == "remove":
-                card_fs.remove_file(root, change.path)
-        for change in plan.changes:
             if change.action == "update":
+                current = change.backup
                 mode = card_fs.file_mode(root, change.path, NEW_FILE_MODE)
-                card_fs.write_file(root, change.backup, card_fs.on_card(root, change.path).read_bytes(), mode)
-                done.append(change.backup)
+                card_fs.write_file(root, change.backup, card_fs.on_card(root, change.path).read_bytes(), mode,
+                                   done.folders)
+                done.backups.append(change.backup)
         for change in plan.changes:
             if change.action in ("create", "update"):
+                current = change.path
                 card_fs.write_file(root, change.path, change.data, card_fs.file_mode(root, change.path,
-                                                                                     NEW_FILE_MODE))
-                done.append(change.path)
+                                                                                     NEW_FILE_MODE), done.folders)
+                if change.action == "create":
+                    done.created.append(change.path)
+                else:
+                    done.updated.append((change.path, change.backup))
     except OSError as err:
-        # Each file is whole (old or new); say how far we got so the user can finish or restore from backups.
-        raise ForaNavError("--sd %s: writing stopped after %d file(s) (%s): %s"
-                           % (shown, len(done), ", ".join(done[-3:]) or "none", err))
+        left = _undo(root, done)
+        state = ("the card is as it was before this deploy" if not left else
+                 "could not undo %s: restore them from their .foranav-bak-<n> backups" % ", ".join(left))
+        raise ForaNavError("--sd %s: writing %s failed (%s); %s"
+                           % (shown, current, err.strerror or err, state))
+    for change in plan.changes:
+        if change.action == "remove":
+            try:
+                card_fs.remove_file(root, change.path)
+            except OSError:
+                pass  # a leftover temporary file; the next deploy tries again
 
 
 def describe_plan(plan: DeployPlan, root: str | os.PathLike, dry_run: bool) -> list[str]:

@@ -100,21 +100,30 @@ def _set_mode(path: str, mode: int) -> None:
         pass
 
 
-def _make_folders(folder: Path) -> None:
-    """mkdir -p, with each new folder's entry fsync'ed into its parent."""
+def _make_folders(folder: Path, made: list) -> None:
+    """mkdir -p, with each new folder's entry fsync'ed into its parent; each new folder is appended to `made`."""
     missing = []
     while not folder.exists():
         missing.append(folder)
         folder = folder.parent
     for new in reversed(missing):
         new.mkdir()
+        made.append(new)
         _fsync_folder(new.parent)
 
 
-def write_file(root: Path, relative: str, data: bytes, mode: int) -> None:
-    """Write `data` to the card path durably: temporary file, fsync, rename, fsync of the folder."""
+def free_space(root: Path) -> tuple[int, int]:
+    """(bytes free for us, allocation block in bytes) of the card's file system."""
+    info = os.statvfs(str(root))
+    block = info.f_frsize or info.f_bsize
+    return info.f_bavail * block, block
+
+
+def write_file(root: Path, relative: str, data: bytes, mode: int, made_folders: list | None = None) -> None:
+    """Write `data` to the card path durably: temporary file, fsync, rename, fsync of the folder. Folders it
+    makes are appended to `made_folders` (so a failed deploy can remove them)."""
     target = on_card(root, relative)
-    _make_folders(target.parent)
+    _make_folders(target.parent, [] if made_folders is None else made_folders)
     fd, tmp = tempfile.mkstemp(prefix="." + target.name + TEMP_MARK, dir=str(target.parent))
     try:
         with os.fdopen(fd, "wb") as handle:
@@ -127,6 +136,17 @@ def write_file(root: Path, relative: str, data: bytes, mode: int) -> None:
         if os.path.lexists(tmp):
             os.unlink(tmp)
     _fsync_folder(target.parent)
+
+
+def restore_file(root: Path, backup: str, relative: str) -> None:
+    """Put the backup back in place of the file (a rename: it needs no free space)."""
+    os.replace(str(on_card(root, backup)), str(on_card(root, relative)))
+    _fsync_folder(on_card(root, relative).parent)
+
+
+def remove_folder(folder: Path) -> None:
+    folder.rmdir()
+    _fsync_folder(folder.parent)
 
 
 def remove_file(root: Path, relative: str) -> None:

@@ -3,7 +3,9 @@
 The clip's frames go through the unchanged JeVois module and over a real pseudo-terminal into the Crazyflie
 app, whose state estimate follows the recorded poses (whatever it commands). Reports the detections per frame
 against the sidecar's ground truth, the tree map the app built (world positions against the map) and the
-setpoints the app would have sent. The sidecar format (also for real footage with a pose log) is documented in
+setpoints the app would have sent. A video that is not the one the sidecar was recorded with (its SHA-256
+differs: another clip's, another map's) is refused; a --map other than the map the clip was recorded over is
+replayed with a warning. The sidecar format (also for real footage with a pose log) is documented in
 host_tools/sim/clip.py and README.md (Clips).
 
 Examples:
@@ -17,7 +19,7 @@ from typing import TextIO
 
 from host_tools import argtypes
 from host_tools.errors import ForaNavError
-from host_tools.flight.replay import replay_clip
+from host_tools.flight.replay import map_override_warning, replay_clip
 from host_tools.maps import load_map
 from host_tools.flight.registry import FPS_RANGE
 from host_tools.sim.clip import read_clip
@@ -27,7 +29,8 @@ LATENCY_MAX_MS = 5000  # as fly --latency-ms
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("clip", help="clip folder (clip.avi + clip.json) or its clip.json")
-    parser.add_argument("--map", help="map giving the path F, when the sidecar has none (or to override it)")
+    parser.add_argument("--map", help="map giving the path F, when the sidecar has none (or to override it: a map "
+                        "other than the recorded one is warned about)")
     parser.add_argument("--latency-ms", type=argtypes.int_range(0, LATENCY_MAX_MS), default=None,
                         help="delay of the module's lines on the wire (default: one clip frame)")
     parser.add_argument("--json", action="store_true", help="print the full report (with per-frame rows and "
@@ -69,6 +72,9 @@ def run(args: argparse.Namespace) -> int:
                            "link watch is 1 s)" % ((clip.directory / "clip.json", clip.fps) + FPS_RANGE))
     clip.check_video()
     pmap = load_map(args.map) if args.map else None
+    warning = map_override_warning(clip, pmap) if pmap is not None else None
+    if warning:
+        print("warning: " + warning, file=sys.stderr)
     if args.latency_ms is not None and args.latency_ms < 0:
         raise ForaNavError("--latency-ms: must not be negative")
     report = replay_clip(clip, pmap, latency_ms=args.latency_ms, app=args.app)

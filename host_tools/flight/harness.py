@@ -144,17 +144,18 @@ class Flight:
         return summarize(self)
 
     def write_outputs(self, summary: dict) -> None:
-        """flight.tlog is already there; add trajectory.png, summary.json (and the camera's detections.csv)."""
+        """flight.tlog is already there; add the camera's detections.csv and summary.json, then trajectory.png
+        last: the record of the flight is on disk before the slowest output is drawn (and whatever the plot does)."""
         from host_tools.flight.plot import plot_trajectory  # matplotlib: loaded only by a flight that draws
 
         summary["tlog"] = str(self.out_dir / "flight.tlog")
         summary["plot"] = str(self.out_dir / "trajectory.png")
         summary["summary"] = str(self.out_dir / "summary.json")
-        plot_trajectory(self, summary["plot"])
         if hasattr(self.camera, "frames_csv"):
             summary["detections_csv"] = str(self.out_dir / "detections.csv")
             fileio.write_text(summary["detections_csv"], self.camera.frames_csv())
         fileio.write_json(summary["summary"], {k: v for k, v in summary.items() if k != "cpu_s"})
+        plot_trajectory(self, summary["plot"])
 
 
 def run_flight(pmap: PlantationMap, camera: Camera, *, seed: int = 0, out_dir: str | os.PathLike | None = None,

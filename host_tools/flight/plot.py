@@ -6,11 +6,14 @@ from crazyflie_app.app.navigation_core import PHASE_RECOVERY
 from host_tools import fileio
 from host_tools.flight.components import FlightView
 from host_tools.maps import PlantationMap
-from host_tools.plotting import Circle, plt
+from host_tools.plotting import Circle, PatchCollection, plt
 from host_tools.sim.world import World
 
 COLOURS = {"target": "#2e7d32", "non_target": "#9e9e9e", "reached": "#1565c0", "recovery": "#d32f2f",
            "path": "#555555", "truth": "#1565c0", "estimate": "#90caf9", "app_tree": "#ff8f00"}
+# Tree ids are drawn up to this many trees: beyond, the labels overlap into a smudge and cost a text artist each
+# (a 1000-tree map spent most of its plot time laying them out).
+MAX_LABELLED_TREES = 200
 
 
 def plot_trajectory(flight: FlightView, path: str | os.PathLike) -> None:
@@ -22,14 +25,7 @@ def plot_trajectory(flight: FlightView, path: str | os.PathLike) -> None:
     if photos:  # the map as the camera saw it: photo crowns under the track (outlined, not filled)
         show_mosaic(ax, world)
         zoom_to_content(ax, pmap)
-    reached_ids = {r["id"] for r in flight.reached}
-    for tree in pmap.trees:
-        kind = "target" if tree.target else "non_target"
-        ax.add_patch(Circle((tree.x, tree.y), tree.crown_m / 2, facecolor="none" if photos else COLOURS[kind],
-                            alpha=0.8 if photos else 0.25,
-                            edgecolor=COLOURS["reached"] if tree.id in reached_ids else COLOURS[kind],
-                            linewidth=2.0 if tree.id in reached_ids else 1.0))
-        ax.annotate(str(tree.id), (tree.x, tree.y + tree.crown_m / 2 + 0.03), ha="center", fontsize=8)
+    draw_trees(ax, pmap, {r["id"] for r in flight.reached}, photos)
     xs, ys = zip(*pmap.waypoints)
     ax.plot(xs, ys, "--", color=COLOURS["path"], linewidth=1, label="path F")
     if flight.trajectory:
@@ -58,6 +54,23 @@ def plot_trajectory(flight: FlightView, path: str | os.PathLike) -> None:
     ax.plot([], [], "o", color=COLOURS["target"], alpha=0.4, label="target tree")
     ax.plot([], [], "o", color=COLOURS["non_target"], alpha=0.4, label="non-target tree")
     save_map_figure(fig, ax, pmap.name.split(":")[0] + " - seed %d" % flight.seed, path)
+
+
+def draw_trees(ax: Any, pmap: PlantationMap, reached_ids: set, photos: bool) -> None:
+    """The map's crowns as one collection (one artist, not one per tree), with their ids on small maps."""
+    crowns = []
+    for tree in pmap.trees:
+        kind = "target" if tree.target else "non_target"
+        crowns.append(Circle((tree.x, tree.y), tree.crown_m / 2, facecolor="none" if photos else COLOURS[kind],
+                             alpha=0.8 if photos else 0.25,
+                             edgecolor=COLOURS["reached"] if tree.id in reached_ids else COLOURS[kind],
+                             linewidth=2.0 if tree.id in reached_ids else 1.0))
+    if crowns:
+        ax.add_collection(PatchCollection(crowns, match_original=True))
+        ax.autoscale_view()
+    if len(pmap.trees) <= MAX_LABELLED_TREES:
+        for tree in pmap.trees:
+            ax.annotate(str(tree.id), (tree.x, tree.y + tree.crown_m / 2 + 0.03), ha="center", fontsize=8)
 
 
 def show_mosaic(ax: Any, world: World, level: int | None = None) -> None:

@@ -136,6 +136,23 @@ class _ClipCamera:
         self.runner = ModuleRunner(params=params, log_stream=NullLog())
 
 
+def map_override_warning(clip: Clip, pmap: PlantationMap) -> str | None:
+    """Pure: a one-line warning when ``pmap`` (given by the user) is not the map the clip was recorded over:
+    other trees, path or height (a name change alone does not count). None when they agree or the clip has no
+    map."""
+    if clip.map is None:
+        return None
+    recorded = map_from_dict(clip.map, source=str(clip.directory / "clip.json"))
+    differ = [what for what, a, b in (("trees", recorded.trees, pmap.trees),
+                                      ("path", recorded.waypoints, pmap.waypoints),
+                                      ("altitude_m", recorded.altitude_m, pmap.altitude_m)) if a != b]
+    if not differ:
+        return None
+    return ("%s: map: the clip was recorded over %r, --map gives %r with other %s: its frames and poses are of "
+            "the recorded map; the path F and the app's tree map are judged against --map"
+            % (clip.directory / "clip.json", recorded.name, pmap.name, " and ".join(differ)))
+
+
 def replay_clip(clip: Clip, pmap: PlantationMap | None = None, *, latency_ms: int | None = None, seed: int = 0,
                 params: dict | None = None, app: str = "python") -> dict:
     """Play ``clip`` (host_tools.sim.clip.Clip) through the module and the app -> the report dict."""

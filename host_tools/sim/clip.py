@@ -9,6 +9,7 @@ The sidecar (``format`` "foranav-clip", ``version`` 1)::
 
     {"format": "foranav-clip", "version": 1,
      "video": "clip.avi",                 # file name relative to the folder
+     "video_sha256": "3f1c...",           # optional: SHA-256 of that file as written; replay refuses another
      "fps": 5.0,                          # nominal frame rate of the video
      "camera": {"width": 352, "height": 288, "focal_px": 322.58, "mount_offset": [0.0, 0.0]},
      "map": {...} | null,                 # the map file's JSON object (host_tools.maps), null if unknown
@@ -25,7 +26,11 @@ The sidecar (``format`` "foranav-clip", ``version`` 1)::
 
 Real footage with a pose log uses the same sidecar: ``trees`` null (or the trees of a surveyed map), ``map``
 null or the surveyed map. Frame ``index`` i is the i-th decoded video frame; ``t_s`` is seconds from the start.
+``video_sha256`` ties the video to its sidecar: a video swapped in from another clip (another map, another
+flight) of the same size and length would otherwise replay against the wrong poses and ground truth without a
+word. ``write_clip`` always writes it; a hand-made sidecar may leave it out (then nothing is checked).
 """
+import hashlib
 import math
 import os
 from collections.abc import Iterable, Iterator, Sequence
@@ -66,6 +71,7 @@ class Clip:
     map: object  # the map's JSON object (dict) or None
     frames: list  # [ClipFrame]
     source: dict
+    video_sha256: str | None = None  # the video's SHA-256 when the sidecar was written (None: not recorded)
 
     @property
     def video_path(self) -> Path:
@@ -86,8 +92,19 @@ class Clip:
             capture.release()
 
     def check_video(self) -> None:
-        """ForaNavError unless the video opens and holds at least one frame per sidecar record, of the camera's
-        size (a truncated or swapped video would otherwise replay part of the clip without a word)."""
+        """ForaNavError unless the video is the one the sidecar was written with (its SHA-256, when recorded),
+        opens and holds at least one frame per sidecar record, of the camera's size (a truncated or swapped
+        video would otherwise replay part of the clip, or another map's flight, without a word)."""
+        if self.video_sha256 is not None:
+            try:
+                digest = file_sha256(self.video_path)
+            except OSError as err:
+                raise ForaNavError("%s: cannot read video: %s" % (self.video_path, err.strerror or err))
+            if digest != self.video_sha256:
+                raise ForaNavError("%s: video_sha256: %s is not the video this sidecar was recorded with (SHA-256 "
+                                   "%s..., the sidecar says %s...): a video of another clip or map? put the clip's "
+                                   "own video back" % (self.directory / SIDECAR_NAME, self.video, digest[:12],
+                                                       self.video_sha256[:12]))
         capture = cv2.VideoCapture(str(self.video_path))
         if not capture.isOpened():
             raise ForaNavError("%s: cannot open video" % self.video_path)
@@ -126,9 +143,21 @@ def frame_record(index: int, t_s: float, pose: Pose, trees: Sequence[TreeInView]
 
 
 def sidecar(frames_records: list[dict], camera: CameraModel, fps: float, map_dict: dict | None = None,
-            source: dict | None = None, video: str = VIDEO_NAME) -> dict:
-    return {"format": FORMAT, "version": VERSION, "video": video, "fps": float(fps),
-            "camera": camera.to_dict(), "map": map_dict, "source": dict(source or {}), "frames": frames_records}
+            source: dict | None = None, video: str = VIDEO_NAME, video_sha256: str | None = None) -> dict:
+    data = {"format": FORMAT, "version": VERSION, "video": video}
+    if video_sha256 is not None:
+        data["video_sha256"] = video_sha256
+    data.update({"fps": float(fps), "camera": camera.to_dict(), "map": map_dict, "source": dict(source or {}),
+                 "frames": frames_records})
+    return data
+
+
+def file_sha256(path: str | os.PathLike) -> str:
+    digest = hashlib.sha256()
+    with open(path, "rb") as handle:
+        for block in iter(lambda: handle.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
 
 
 def _tree_record(t: TreeInView) -> dict:
@@ -168,9 +197,11 @@ def write_clip(out_dir: str | os.PathLike, frames: Iterable[Frame], times_s: Seq
                 records.append(frame_record(index, t_s, frame.pose, frame.trees, frame.objects))
         finally:
             writer.release()
+        video_sha256 = file_sha256(tmp)
         # a folder is a clip only with its sidecar: drop an old one before the new video replaces the old
         (out_dir / SIDECAR_NAME).unlink(missing_ok=True)
-    fileio.write_json(out_dir / SIDECAR_NAME, sidecar(records, camera, fps, map_dict, source), indent=1)
+    fileio.write_json(out_dir / SIDECAR_NAME, sidecar(records, camera, fps, map_dict, source,
+                                                      video_sha256=video_sha256), indent=1)
     return len(records)
 
 
@@ -201,6 +232,10 @@ def clip_from_dict(data: dict, directory: str | os.PathLike, source_name: str = 
     for key, kind in (("frames", list), ("source", dict), ("map", dict), ("video", str)):
         if data.get(key) is not None and not isinstance(data[key], kind):
             fail(key, "must be %s" % {list: "an array", dict: "an object", str: "a file name"}[kind])
+    video_sha256 = data.get("video_sha256")
+    if video_sha256 is not None and not (isinstance(video_sha256, str) and len(video_sha256) == 64
+                                         and all(c in "0123456789abcdef" for c in video_sha256)):
+        fail("video_sha256", "must be 64 lower-case hex digits (the video's SHA-256), or left out")
     frames = []
     for i, rec in enumerate(data.get("frames") or []):
         try:
@@ -227,4 +262,4 @@ def clip_from_dict(data: dict, directory: str | os.PathLike, source_name: str = 
                  % (frame.t_s, frames[-1].t_s))
         frames.append(frame)
     return Clip(Path(directory), str(data.get("video", VIDEO_NAME)), float(fps), camera, data.get("map"), frames,
-                dict(data.get("source") or {}))
+                dict(data.get("source") or {}), video_sha256)

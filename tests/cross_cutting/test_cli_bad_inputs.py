@@ -24,7 +24,7 @@ from host_tools.annotations import read_boxes
 from host_tools.errors import ForaNavError
 from host_tools.maps import map_from_dict
 from host_tools.sim.clip import clip_from_dict, read_clip
-from tests.conftest import MAP3_SHORT_SENSOR_CLIP
+from tests.conftest import FIXTURES, MAP3_SHORT_SENSOR_CLIP
 
 FIXTURE_CLIP = MAP3_SHORT_SENSOR_CLIP
 OLD_BYTES = b"an output from an earlier run\n"
@@ -65,6 +65,10 @@ def inputs(tmp_path_factory):
     (root / "cut_video" / "clip.json").write_bytes((FIXTURE_CLIP / "clip.json").read_bytes())
     video = (FIXTURE_CLIP / "clip.avi").read_bytes()
     (root / "cut_video" / "clip.avi").write_bytes(video[:len(video) // 2])
+    # issue 45: another map's video (map1's, same size, more frames) beside this clip's sidecar
+    (root / "swapped_video").mkdir()
+    (root / "swapped_video" / "clip.json").write_bytes((FIXTURE_CLIP / "clip.json").read_bytes())
+    (root / "swapped_video" / "clip.avi").write_bytes((FIXTURES / "clips" / "map1_full" / "clip.avi").read_bytes())
     (root / "frames_not_list").mkdir()
     sidecar["frames"] = 7
     (root / "frames_not_list" / "clip.json").write_text(json.dumps(sidecar))
@@ -265,6 +269,7 @@ CASES = [
     (["replay", "{in}/frames_not_list"], "frames"),
     (["replay", "no_such_clip"], "no_such_clip"),
     (["replay", "{in}/cut_video"], "clip.avi"),
+    (["replay", "{in}/swapped_video"], "video_sha256"),
     (["replay", CLIP, "--latency-ms", "-1"], "--latency-ms"),
     (["replay", CLIP, "--latency-ms", "70000"], "--latency-ms"),
     (["replay", CLIP, "--map", "{in}/latin1.json"], "latin1.json"),

@@ -238,24 +238,6 @@ def test_that_the_real_module_folder_deploys(tmp_path):
     assert "__init__.py" not in installed
 
 
-def test_that_a_failing_write_stops_with_one_line_and_leaves_whole_files(card_and_module, capsys, monkeypatch):
-    sd, module_dir = card_and_module
-    real_write = card_fs.write_file
-    written = []
-
-    def card_full(root, path, data, mode):
-        if len(written) == 3:
-            raise OSError(28, "No space left on device")
-        written.append(path)
-        real_write(root, path, data, mode)
-
-    monkeypatch.setattr(card_fs, "write_file", card_full)
-    assert deploy(sd, module_dir) == BAD_INPUT_EXIT
-    err = capsys.readouterr().err
-    assert len(err.strip().splitlines()) == 1 and "after 3 file(s)" in err
-    assert read(sd, "config/videomappings.cfg") == USER_VIDEOMAPPINGS  # config files come last
-
-
 def test_that_a_fast_mode_caps_the_trees_per_frame_to_what_the_serial_port_carries(tmp_path, capsys):
     # Fixture: a module reporting up to 8 trees per frame, deployed at 120 fps (5 lines per frame at 115200 baud).
     sd = make_card(tmp_path)

@@ -137,3 +137,47 @@ def test_that_a_params_cfg_written_before_the_markers_is_read_as_foranavs(tmp_pa
     # Assert: recomputed for 15 fps, nothing kept as the user's
     assert active_lines(sd / PARAMS) == []
     assert active_lines(sd / SCRIPT) == ["setpar serout Hard", "setpar serlog None", "setpar serlimit 40"]
+
+
+def test_that_a_redeploy_keeps_the_users_comment_lines_above_what_they_describe(deployed, capsys):
+    sd, module_dir = deployed
+    edit(sd / PARAMS, "#svmthresh=0.5", "# lower threshold: the canopy is dark here\nsvmthresh=0.25")
+    edit(sd / PARAMS, "#step=8", "# step: try 4 if trees are missed\n#step=8")
+    (sd / PARAMS).write_text((sd / PARAMS).read_text() + "# card of drone 3, 2026-11\n")
+    edit(sd / SCRIPT, "setpar serlog None", "# logs on USB while testing\nsetpar serlog USB")
+    (sd / SCRIPT).write_text((sd / SCRIPT).read_text() + "# show the module's info at start\ninfo\n")
+    assert deploy(sd, module_dir, "--mode", "352x288@30") == 0
+    params = (sd / PARAMS).read_text().splitlines()
+    assert params.index("# lower threshold: the canopy is dark here") < params.index("svmthresh=0.25")
+    assert params.index("# step: try 4 if trees are missed") < params.index("#step=8")
+    assert params[-2:] == ["# Your comments, kept by foranav deploy:", "# card of drone 3, 2026-11"]
+    script = (sd / SCRIPT).read_text().splitlines()
+    assert script.index("# logs on USB while testing") < script.index("setpar serlog USB")
+    assert script.index("# show the module's info at start") == script.index("info") - 1
+    # Each comment once, and a further deploy changes nothing.
+    assert params.count("# lower threshold: the canopy is dark here") == 1
+    before = tree_digest(sd)
+    assert deploy(sd, module_dir, "--mode", "352x288@30") == 0
+    assert tree_digest(sd) == before
+
+
+def test_that_foranavs_own_comments_are_not_taken_for_the_users(deployed):
+    sd, module_dir = deployed
+    fresh = (sd / PARAMS).read_text()
+    assert deploy(sd, module_dir, "--mode", "352x288@60") == 0
+    assert "# Your comments" not in (sd / PARAMS).read_text() + (sd / SCRIPT).read_text()
+    assert (sd / PARAMS).read_text().count("\n") == fresh.count("\n")
+
+
+def test_that_the_reason_foranav_gave_for_another_mode_is_not_kept_as_a_users_comment(tmp_path):
+    # A module reporting up to 8 trees: at 120 fps ForaNav caps maxtrees and says why; back at 15 fps it does not.
+    sd, module_dir = make_card(tmp_path), make_module_folder(tmp_path / "src")
+    source = (module_dir / "ForaNavTrees.py").read_text()
+    (module_dir / "ForaNavTrees.py").write_text(source.replace(
+        '"window step", foranav_helper.STEP)', '"window step", foranav_helper.STEP)\n'
+        '        self.add(pc, "maxtrees", "int", "trees per frame", 8)'))
+    assert deploy(sd, module_dir, "--mode", "176x144@120") == 0
+    assert "fps the serial port carries" in (sd / PARAMS).read_text()
+    assert deploy(sd, module_dir) == 0
+    text = (sd / PARAMS).read_text()
+    assert "fps the serial port carries" not in text and "# Your comments" not in text

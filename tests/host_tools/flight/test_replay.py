@@ -5,7 +5,8 @@ import json
 import pytest
 
 from host_tools import cli
-from host_tools.flight.replay import expectation_record, replay_clip
+from host_tools.flight.replay import expectation_record, map_override_warning, replay_clip
+from host_tools.maps import load_map
 from host_tools.sim.clip import read_clip
 from tests.conftest import FIXTURES, MAP3_SHORT_SENSOR_CLIP, REPO_ROOT
 
@@ -44,3 +45,22 @@ def test_that_replay_without_a_map_fails_in_one_line(tmp_path, capsys):
     assert cli.main(["replay", str(tmp_path)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "--map" in err[0]
+
+
+def test_that_a_clip_whose_video_is_another_maps_is_refused_in_one_line(tmp_path, capsys):
+    # Fixture: map3's sidecar beside map1's video (same camera size, more frames than the sidecar needs).
+    (tmp_path / "clip.json").write_bytes((MAP3_SHORT_SENSOR_CLIP / "clip.json").read_bytes())
+    (tmp_path / "clip.avi").write_bytes((FIXTURES / "clips" / "map1_full" / "clip.avi").read_bytes())
+    assert cli.main(["replay", str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and str(tmp_path / "clip.json") + ": video_sha256" in err[0] and "clip.avi" in err[0]
+
+
+def test_that_a_map_other_than_the_recorded_one_is_replayed_with_a_warning(capsys):
+    clip = read_clip(MAP3_SHORT_SENSOR_CLIP)
+    assert map_override_warning(clip, load_map("map3")) is None  # the recorded map itself: nothing to say
+    warning = map_override_warning(clip, load_map("map2"))
+    assert "clip.json: map: the clip was recorded over" in warning and "trees" in warning
+    assert cli.main(["replay", str(MAP3_SHORT_SENSOR_CLIP), "--map", "map2", "--json"]) == 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == ["warning: " + warning]

@@ -1,4 +1,5 @@
 """The clip format: written frames and ground truth read back; bad sidecars are one clear line."""
+import hashlib
 import json
 
 import numpy as np
@@ -59,6 +60,7 @@ def test_that_writing_the_same_frames_gives_the_same_bytes(written_clip, tmp_pat
     (lambda d: d["frames"][1]["pose"].pop("z"), "frames[1]"),
     (lambda d: d["frames"][2].update(index=5), "frames[2].index"),
     (lambda d: d["frames"][0]["pose"].update(x=float("nan")), "frames[0]"),
+    (lambda d: d.update(video_sha256="not a digest"), "video_sha256"),
 ])
 def test_that_a_bad_sidecar_is_named_in_one_line(written_clip, tmp_path, change, needle):
     data = json.loads((written_clip[0] / SIDECAR_NAME).read_text())
@@ -87,3 +89,32 @@ def test_that_poses_along_the_path_keep_constant_speed_and_end_at_the_last_waypo
     steps = [np.hypot(b.x - a.x, b.y - a.y) for (_, a), (_, b) in zip(timed, timed[1:])]
     assert max(steps) <= 0.03 + 1e-9 and np.median(steps) == pytest.approx(0.03)
     assert {p.z for _, p in timed} == {1.25}
+
+
+def test_that_the_sidecar_records_its_videos_digest_and_the_clip_reads_it_back(written_clip):
+    out = written_clip[0]
+    clip = read_clip(out)
+    assert clip.video_sha256 == hashlib.sha256((out / "clip.avi").read_bytes()).hexdigest()
+    clip.check_video()
+
+
+def test_that_a_video_swapped_in_from_another_clip_is_refused_in_one_line(written_clip, tmp_path):
+    # Fixture: the same sidecar with another clip's video of the same size and length (another map's flight).
+    out, frames, timed = written_clip
+    other_map = load_map("map1")
+    other = [World.from_map(other_map).render(CameraModel(), pose) for _, pose in timed]
+    write_clip(tmp_path / "other", other, [t for t, _ in timed], CameraModel(), 5.0, map_to_dict(other_map))
+    (tmp_path / "swapped").mkdir()
+    (tmp_path / "swapped" / SIDECAR_NAME).write_bytes((out / SIDECAR_NAME).read_bytes())
+    (tmp_path / "swapped" / "clip.avi").write_bytes((tmp_path / "other" / "clip.avi").read_bytes())
+    # Test
+    with pytest.raises(ForaNavError) as err:
+        read_clip(tmp_path / "swapped").check_video()
+    # Assert
+    message = str(err.value)
+    assert "\n" not in message and "swapped/clip.json: video_sha256" in message and "clip.avi" in message
+    # A hand-made sidecar without the digest is not checked (real footage written by other tools).
+    data = json.loads((out / SIDECAR_NAME).read_text())
+    del data["video_sha256"]
+    (tmp_path / "swapped" / SIDECAR_NAME).write_text(json.dumps(data))
+    read_clip(tmp_path / "swapped").check_video()
