@@ -269,8 +269,9 @@ def _mission_text(mission: dict | None) -> str:
     if mission is None:
         return ""
     reached = {r["id"] for r in mission["reached"] or []} & set(mission["targets"] or [])
-    return "; mission: %d of %d targets reached, %s" % (len(reached), len(mission["targets"] or []),
-                                                        "completed" if mission["completed"] else "not completed")
+    return "; mission: %d of %d targets reached, %s, mean deviation %s m" % (
+        len(reached), len(mission["targets"] or []), "completed" if mission["completed"] else "not completed",
+        mission["mean_deviation_m"])
 
 
 def _stop_children(children: list[subprocess.Popen]) -> None:
@@ -318,9 +319,10 @@ def serve_drones(specs: list[DroneSpec], out: TextIO = sys.stdout) -> int:
             for line in child.stdout:
                 report = json.loads(line)
                 crash = " CRASHED: %s" % report["crash"] if report["crashed"] else ""
-                print("drone %d: stopped (%s) after %.1f s, %d connection(s)%s%s" % (
-                    spec.index, report["stopped"], report["sim_s"], report["connections"], crash,
-                    _mission_text(report.get("mission"))), file=out, flush=True)
+                print("drone %d: stopped (%s) after %.1f s, %d connection(s), behind the wall clock at most "
+                      "%.2f s%s%s" % (spec.index, report["stopped"], report["sim_s"], report["connections"],
+                                      report["max_lag_s"], crash, _mission_text(report.get("mission"))),
+                      file=out, flush=True)
             child.wait()
     except KeyboardInterrupt:
         print("stopping %d drone(s)" % len(children), file=out, flush=True)
