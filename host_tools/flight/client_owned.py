@@ -4,10 +4,11 @@
     python -m host_tools.flight.client_owned SPEC    one drone (SPEC: a DroneSpec as JSON)
 
 A drone is the emulated Crazyflie (either plant) resting on the ground of a map, serving CRTP on its own UDP
-port with nothing else running: no app, no camera. The client owns it, as cflib owns a Crazyflie on the
-desk: it arms it (``cf.supervisor.send_arming_request``), streams setpoints (``cf.commander``, the
-MotionCommander), reads and writes params, logs. The clock is the wall clock (as ``--realtime``): requests
-are served while the pacer waits between ticks.
+port with nothing else running: no app, no camera (``Drone``); or, with ``DroneSpec.app``, with the flight
+app and its camera loaded, the app waiting on ``app.start`` (``MissionDrone``). The client owns an idle
+drone, as cflib owns a Crazyflie on the desk: it arms it (``cf.supervisor.send_arming_request``), streams
+setpoints (``cf.commander``, the MotionCommander), reads and writes params, logs. The clock is the wall
+clock (as ``--realtime``): requests are served while the pacer waits between ticks.
 
 Drone ``i`` of ``N`` serves ``udp://HOST:PORT+i`` and starts at the map's first waypoint, ``i *
 SPACING_M`` to the left (y) of it, yaw 0. Its MAVLink log (heartbeat, estimate, ground truth, console) goes

@@ -1,8 +1,8 @@
 """Serve idle emulated Crazyflies that a client flies (cflib, cfclient, Bitcraze's examples), in real time.
 
 Each drone is the emulated Crazyflie (--plant firmware: the real firmware's commander, supervisor, PID
-controller and Kalman filter; --plant reduced: the reduced model) resting on the ground of --map, with no app
-running: the client owns it. It arms it (cf.supervisor.send_arming_request(True)), flies it with setpoints
+controller and Kalman filter; --plant reduced: the reduced model) resting on the ground of --map; without --app no
+app runs: the client owns it. It arms it (cf.supervisor.send_arming_request(True)), flies it with setpoints
 (cf.commander, cflib's MotionCommander), reads and writes every param and log variable the plant declares
 (docs/crtp.md). Drone i of --count N serves udp://HOST:PORT+i, one process each, and starts 0.5 m to the left
 of the previous one at the map's first waypoint. cflib's scan finds ports 19850-19859.
