@@ -2,7 +2,8 @@
 the C app (``c_app.CNavigationApp``, C core) boot, check and fly the same way, as foranav_app.c does:
 
 wait for the system (``BOOT_DELAY_MS``), check the decks (no Flow deck: abort; no Loco deck: a warning),
-resolve the ``stateEstimate`` log ids, wait ``PRE_TAKEOFF_DELAY_MS``, wait for the camera (``app.camWaitMs``),
+resolve the ``stateEstimate`` log ids, wait for a client to write ``app.start`` = 1 when it is 0 (the
+default 1 starts at once), wait ``PRE_TAKEOFF_DELAY_MS``, wait for the camera (``app.camWaitMs``),
 request arming, then every 10 ms read the estimate, step the core and send its setpoint at
 COMMANDER_PRIORITY_EXTRX. What differs between the apps (the core, how a pose is read, how the console prints
 events and numbers) is the ``FlightApp`` each passes in.
@@ -22,6 +23,7 @@ CAMERA_TASK_PERIOD_MS = 10  # serial polling period; reading never blocks
 BOOT_DELAY_MS = 2000  # Navigation.c: wait 2 s, then check the decks
 PRE_TAKEOFF_DELAY_MS = 3000  # Navigation.c: wait 3 s more before take-off
 CAMERA_WAIT_POLL_MS = 10  # pre-flight camera check: how often app_main looks whether the camera was heard
+START_POLL_MS = 10  # app.start 0: how often app_main looks whether a client started it
 ESTIMATE_NAMES = ("x", "y", "z", "yaw", "vx", "vy")  # the stateEstimate variables a pose is read from
 
 
@@ -113,6 +115,11 @@ def _preflight(app: FlightApp) -> Iterator[Delay]:
         cf.debug_print(DEBUG_MODULE, "stateEstimate not available, aborting")
         return False
     app.estimate_ids = ids
+    if not app.params.start:  # on the ground, motors off, until a client (cflib, cfclient) writes app.start = 1
+        cf.debug_print(DEBUG_MODULE, "Waiting for app.start = 1")
+        while not app.params.start:
+            yield v_task_delay(m2t(START_POLL_MS))
+        cf.debug_print(DEBUG_MODULE, "Started by app.start")
     yield v_task_delay(m2t(PRE_TAKEOFF_DELAY_MS))
     waited_ms = 0
     while not app.camera_alive(cf.x_task_get_tick_count()):

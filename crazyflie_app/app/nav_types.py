@@ -109,6 +109,7 @@ class NavigationParams:
     camera_wait_ms: int = 20000  # before take-off: camera unheard this long -> NO_CAMERA, never take off
     #                              (0: take off without waiting, e.g. a replayed clip that starts in flight)
     frame_capacity: int = 64  # detections kept per frame; more before MARK STOP are dropped (counted)
+    start: int = 1  # 0: after its deck checks the app waits on the ground, motors off, until a client writes 1
 
     @property
     def focal_px(self) -> float:

@@ -282,6 +282,9 @@ PARAM_TABLE = param_group("app", [
     param_add(PARAM_UINT8, "frameCap", "frame_capacity", "",
               "detections kept per frame; more before the frame's MARK STOP are dropped (LOG frameOverflow)",
               valid=(1, 255)),
+    param_add(PARAM_UINT8, "start", "start", "",
+              "0: after its deck checks the app waits on the ground, motors off, until a client writes 1 (then "
+              "take-off 3 s later); 1 (default): it starts by itself", valid=(0, 1)),
     param_add(PARAM_FLOAT, "recoverySpeed", "recovery_speed", "m/s", "speed when re-approaching s_t",
               valid=(0.01, 1.0)),
     param_add(PARAM_FLOAT, "returnTol", "return_tolerance_m", "m",

@@ -44,7 +44,7 @@ _D, _I = ctypes.c_double, ctypes.c_int32
 _INT_PARAMS = {"takeoff_settle_ms", "land_step_ms", "settle_dwell_ms", "settle_grace_ms", "lost_timeout_ms",
                "recovery_timeout_ms", "target_timeout_ms", "anchor_min_trees", "min_hits", "tree_capacity", "visited_capacity",
                "cam_width_px", "cam_height_px", "cam_latency_ms", "link_hold_ms", "link_land_ms", "camera_wait_ms",
-               "frame_capacity"}
+               "frame_capacity", "start"}
 PARAM_NAMES = (
     "altitude_m", "takeoff_tolerance_m", "takeoff_settle_ms", "land_height_m", "land_final_m", "land_step_ms",
     "arrival_min_speed", "cruise_speed", "waypoint_tolerance_m", "lookahead_m", "approach_speed", "servo_gain",
@@ -54,7 +54,7 @@ PARAM_NAMES = (
     "crown_size_m", "column_factor", "row_spacing_m", "anchor_min_trees", "anchor_gain",
     "min_hits", "tree_capacity", "visited_capacity", "cam_width_px", "cam_height_px", "cam_scale", "cam_offset_x_m",
     "cam_offset_y_m", "cam_latency_ms", "kf_measurement_std_px", "kf_accel_psd", "link_hold_ms", "link_land_ms",
-    "camera_wait_ms", "frame_capacity")
+    "camera_wait_ms", "frame_capacity", "start")
 _PARAM_FIELDS = [(name, _I if name in _INT_PARAMS else _D) for name in PARAM_NAMES]
 
 

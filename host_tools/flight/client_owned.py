@@ -4,10 +4,11 @@
     python -m host_tools.flight.client_owned SPEC    one drone (SPEC: a DroneSpec as JSON)
 
 A drone is the emulated Crazyflie (either plant) resting on the ground of a map, serving CRTP on its own UDP
-port with nothing else running: no app, no camera. The client owns it, as cflib owns a Crazyflie on the
-desk: it arms it (``cf.supervisor.send_arming_request``), streams setpoints (``cf.commander``, the
-MotionCommander), reads and writes params, logs. The clock is the wall clock (as ``--realtime``): requests
-are served while the pacer waits between ticks.
+port with nothing else running: no app, no camera (``Drone``); or, with ``DroneSpec.app``, with the flight
+app and its camera loaded, the app waiting on ``app.start`` (``MissionDrone``). The client owns an idle
+drone, as cflib owns a Crazyflie on the desk: it arms it (``cf.supervisor.send_arming_request``), streams
+setpoints (``cf.commander``, the MotionCommander), reads and writes params, logs. The clock is the wall
+clock (as ``--realtime``): requests are served while the pacer waits between ticks.
 
 Drone ``i`` of ``N`` serves ``udp://HOST:PORT+i`` and starts at the map's first waypoint, ``i *
 SPACING_M`` to the left (y) of it, yaw 0. Its MAVLink log (heartbeat, estimate, ground truth, console) goes
@@ -46,6 +47,7 @@ HEARTBEAT_PERIOD_MS = 1000
 RUN_CHUNK_MS = 100  # the loop looks at its stop conditions this often (simulated, = wall)
 READY_TIMEOUT_S = 60.0
 STOP_TIMEOUT_S = 5.0
+MISSION_MAX_TIME_S = 24 * 3600.0  # a drone with an app: the flight's own limit (its client may wait long)
 IDLE_STATES = ("PRE_FLIGHT", "PRE_FLIGHT_CHECKS_NOT_PASSED", "NOT_INITIALIZED", "LANDED", "READY_TO_FLY")
 
 
@@ -60,6 +62,8 @@ class DroneSpec:
     seed: int = 0
     out_dir: str | None = None
     max_time_s: float | None = None
+    app: str | None = None  # a flight app loaded ('python', 'c'): it waits for the client's app.start = 1
+    camera: str = "sim"  # the loaded app's camera ('sim', 'oracle')
 
 
 class _Stop:
@@ -165,11 +169,84 @@ class Drone:
         self.cf.close()
 
 
+class MissionDrone:
+    """A drone with the flight app loaded and its camera running (the harness's flight, on the wall clock):
+    on the ground, motors off, its app waiting on ``app.start`` until the client writes 1; then it flies the
+    mission as ``foranav fly`` would, and stays (landed, still serving) until stopped. Outputs of a flight
+    (flight.tlog, summary.json, trajectory.png) go to OUT/droneI/."""
+
+    def __init__(self, spec: DroneSpec):
+        from host_tools.flight import harness  # the flight stack: loaded only by a drone that flies a mission
+
+        self.spec = spec
+        self.pmap = load_map(spec.map)
+        x0, y0 = self.pmap.waypoints[0]
+        self.start = (float(x0), float(y0) + spec.index * SPACING_M, 0.0)
+        seed = spec.seed + spec.index
+        try:
+            self.camera = harness.camera_factory(spec.camera)(self.pmap, seed=seed)
+        except ValueError as err:
+            raise ForaNavError("--camera %s: %s" % (spec.camera, err))
+        options = {"plant": spec.plant, "app": spec.app, "crtp": "%s:%d" % (spec.host, spec.port),
+                   "lockstep": False, "start": self.start[:2], "params": {"app.start": 0},
+                   "max_time_s": MISSION_MAX_TIME_S}
+        out_dir = None if spec.out_dir is None else Path(spec.out_dir) / ("drone%d" % spec.index)
+        try:
+            self.flight = harness.Flight(self.pmap, self.camera, seed=seed, out_dir=out_dir, options=options,
+                                         stop_after_landing=False)
+        except BaseException:
+            self._close_camera()
+            raise
+        self.cf = self.flight.rig.cf
+        self.server = self.flight.crtp
+        self.max_lag_s = 0.0
+        self.summary = None
+
+    @property
+    def uri(self) -> str:
+        return self.server.uri
+
+    def _pacer(self):
+        """Simulated time follows the wall clock; the server answers requests while the pacer waits."""
+        wall0 = time.monotonic()
+        while True:
+            ahead = wall0 + self.cf.x_task_get_tick_count() / 1000.0 - time.monotonic()
+            if ahead > 0:
+                self.flight.wait_wall(ahead)
+            self.max_lag_s = max(self.max_lag_s, -ahead)
+            yield v_task_delay(PACE_PERIOD_MS)
+
+    def run(self, stop: _Stop) -> str:
+        self.cf.x_task_create(self._pacer(), "DRONE_PACER", 0)
+        self.flight.run(stop=lambda: stop.check() is not None)
+        return stop.check() or "mission time limit"
+
+    def report(self) -> dict:
+        """What the mission did (after close): the flight summary's scoring."""
+        summary = self.summary or {}
+        return {key: summary.get(key) for key in ("completed", "success", "targets", "reached", "missed_targets",
+                                                  "mean_deviation_m", "mission_time_s")}
+
+    def _close_camera(self) -> None:
+        close = getattr(self.camera, "close", None)
+        if close is not None:
+            close()
+
+    def close(self) -> None:
+        try:
+            self.flight.close(keep=True)
+            self.summary = self.flight.summary()
+            if self.flight.out_dir is not None:
+                self.flight.write_outputs(self.summary)
+        finally:
+            self._close_camera()
+
+
 def _serve_one(spec: DroneSpec) -> int:
     """The drone's process: bind, say READY with the URI, serve until stopped, report, exit."""
     stop = _Stop(spec.max_time_s)
     try:
-        drone = Drone(spec)
+        drone = Drone(spec) if spec.app is None else MissionDrone(spec)
     except ForaNavError as err:
         print(json.dumps({"error": str(err)}), flush=True)
         return 2
@@ -183,8 +260,19 @@ def _serve_one(spec: DroneSpec) -> int:
     print(json.dumps({"stopped": reason, "uri": uri, "sim_s": drone.cf.x_task_get_tick_count() / 1000.0,
                       "connections": stats.connections, "crashed": drone.cf.model.crashed,
                       "crash": drone.cf.model.crash_reason, "stream_dropped": stats.stream_dropped,
-                      "max_lag_s": round(drone.max_lag_s, 3)}), flush=True)
+                      "max_lag_s": round(drone.max_lag_s, 3),
+                      "mission": drone.report() if spec.app is not None else None}), flush=True)
     return 0
+
+
+def _mission_text(mission: dict | None) -> str:
+    """'; mission: 6 of 6 targets reached, completed' (a drone with an app), '' otherwise."""
+    if mission is None:
+        return ""
+    reached = {r["id"] for r in mission["reached"] or []} & set(mission["targets"] or [])
+    return "; mission: %d of %d targets reached, %s, mean deviation %s m" % (
+        len(reached), len(mission["targets"] or []), "completed" if mission["completed"] else "not completed",
+        mission["mean_deviation_m"])
 
 
 def _stop_children(children: list[subprocess.Popen]) -> None:
@@ -232,9 +320,10 @@ def serve_drones(specs: list[DroneSpec], out: TextIO = sys.stdout) -> int:
             for line in child.stdout:
                 report = json.loads(line)
                 crash = " CRASHED: %s" % report["crash"] if report["crashed"] else ""
-                print("drone %d: stopped (%s) after %.1f s, %d connection(s)%s" % (
-                    spec.index, report["stopped"], report["sim_s"], report["connections"], crash), file=out,
-                    flush=True)
+                print("drone %d: stopped (%s) after %.1f s, %d connection(s), behind the wall clock at most "
+                      "%.2f s%s%s" % (spec.index, report["stopped"], report["sim_s"], report["connections"],
+                                      report["max_lag_s"], crash, _mission_text(report.get("mission"))),
+                      file=out, flush=True)
             child.wait()
     except KeyboardInterrupt:
         print("stopping %d drone(s)" % len(children), file=out, flush=True)

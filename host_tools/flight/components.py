@@ -358,8 +358,9 @@ class Monitor:
     stops the scheduler once the app is done and the MAV has landed."""
 
     def __init__(self, rig: FlightRig, record: FlightRecord, hide: HideFault,
-                 progress: Callable[[float, str], None] | None = None):
+                 progress: Callable[[float, str], None] | None = None, stop_after_landing: bool = True):
         self.rig, self.record, self.hide, self.progress = rig, record, hide, progress
+        self.stop_after_landing = stop_after_landing  # False: a served drone stays on the ground, answering
 
     def task(self) -> Task:
         rig, record = self.rig, self.record
@@ -387,7 +388,7 @@ class Monitor:
                 if record.done_ms is None:
                     record.done_ms = now
                 landed = state in (LANDED, LOCKED) or crashed or phase in (PHASE_NO_DECK, PHASE_NO_CAMERA)
-                if landed and now - record.done_ms >= AFTER_LANDING_MS:
+                if landed and now - record.done_ms >= AFTER_LANDING_MS and self.stop_after_landing:
                     rig.cf.scheduler.stop()
             yield v_task_delay(MONITOR_PERIOD_MS)
 

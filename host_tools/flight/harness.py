@@ -72,6 +72,7 @@ from host_tools.flight.summary import summarize
 from host_tools.maps import PlantationMap, map_from_dict
 
 Progress = Callable[[float, str], None]  # progress(t_s, phase name), about once a simulated second
+STOP_CHECK_MS = 100  # Flight.run(stop=...): how often the stop condition is asked
 
 
 class Flight:
@@ -83,7 +84,7 @@ class Flight:
     """
 
     def __init__(self, pmap: PlantationMap, camera: Camera, *, seed: int = 0, out_dir: str | os.PathLike | None = None,
-                 options: dict | None = None, progress: Progress | None = None):
+                 options: dict | None = None, progress: Progress | None = None, stop_after_landing: bool = True):
         self.options = check_options(options)
         self.pmap, self.camera, self.seed, self.progress = pmap, camera, seed, progress
         self.out_dir = Path(out_dir) if out_dir is not None else None
@@ -103,7 +104,7 @@ class Flight:
         self.record = FlightRecord(pmap, self.rig, tlog)
         self.hide = HideFault(pmap, self.rig, self.options)
         self.feed = CameraFeed(camera, self.rig, self.hide, self.options, seed)
-        self.monitor = Monitor(self.rig, self.record, self.hide, progress)
+        self.monitor = Monitor(self.rig, self.record, self.hide, progress, stop_after_landing=stop_after_landing)
         self.camera_killed_ms = None  # set by realtime's --kill-camera-at (the plot marks it)
         self.cpu_s = 0.0
 
@@ -113,7 +114,9 @@ class Flight:
     detections = property(lambda self: self.record.detections)
     app_trees = property(lambda self: self.record.app_trees)
 
-    def run(self, world_task: Iterator | None = None) -> None:
+    def run(self, world_task: Iterator | None = None, stop: Callable[[], bool] | None = None) -> None:
+        """Run the flight to its end (the monitor stops it after landing) or its time limit; with ``stop``,
+        also until ``stop()`` says so (asked every STOP_CHECK_MS of simulated time: a served drone's signals)."""
         cf = self.rig.cf
         cf.x_task_create(world_task if world_task is not None else self.feed.task(), "HARNESS_CAMERA",
                          WORLD_TASK_PRI)
@@ -124,7 +127,13 @@ class Flight:
         if self.crtp is not None:
             self.crtp.start()  # the last task: it adds nothing the others see unless a client speaks
         cpu0 = time.process_time()
-        cf.run_until(int(float(self.options["max_time_s"]) * 1000) + 1)
+        end = int(float(self.options["max_time_s"]) * 1000) + 1
+        if stop is None:
+            cf.run_until(end)
+        else:
+            while (cf.x_task_get_tick_count() < end and not stop()
+                   and cf.run_until(min(end, cf.x_task_get_tick_count() + STOP_CHECK_MS))):
+                pass
         self.cpu_s = time.process_time() - cpu0
 
     def wait_wall(self, seconds: float) -> None:

@@ -40,6 +40,7 @@
 #define APP_PERIOD_MS 10           /* the main loop */
 #define CAMERA_PERIOD_MS 10        /* UART2 polling: 200 bytes hold 17 ms of 115200 baud */
 #define CAMERA_WAIT_POLL_MS 10     /* pre-flight camera check */
+#define START_POLL_MS 10           /* app.start 0: how often the app looks whether a client started it */
 #define CAMERA_TASK_PRI 1
 #define CAMERA_TASK_STACKSIZE 800 /* words: the frame path (association, events) needs ~2 kB */
 #define UART2_BAUDRATE 115200
@@ -154,6 +155,23 @@ void appMain(void) {
   xSemaphoreTake(coreMutex, portMAX_DELAY);
   estimateReady = true;
   xSemaphoreGive(coreMutex);
+  /* app.start 0: on the ground, motors off, until a client (cflib, cfclient) writes app.start = 1 */
+  for (bool waiting = false;; waiting = true) {
+    xSemaphoreTake(coreMutex, portMAX_DELAY);
+    foranavParamsToCore(&core.params);
+    const bool start = core.params.start != 0;
+    xSemaphoreGive(coreMutex);
+    if (start) {
+      if (waiting) {
+        DEBUG_PRINT("Started by app.start\n");
+      }
+      break;
+    }
+    if (!waiting) {
+      DEBUG_PRINT("Waiting for app.start = 1\n");
+    }
+    vTaskDelay(M2T(START_POLL_MS));
+  }
   vTaskDelay(M2T(PRE_TAKEOFF_DELAY_MS));
   /* a camera never heard is a camera lost: flying the path blind would "complete" nothing */
   for (int32_t waited = 0;; waited += CAMERA_WAIT_POLL_MS) {

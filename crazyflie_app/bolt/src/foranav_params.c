@@ -39,6 +39,7 @@ static struct {
   uint16_t linkLandMs;
   uint16_t camWaitMs;
   uint8_t frameCap;
+  uint8_t start;
   float recoverySpeed;
   float returnTol;
   float mergeRadius;
@@ -90,6 +91,7 @@ void foranavParamsToCore(NavParams* p) {
   p->link_land_ms = (int32_t)appParams.linkLandMs;
   p->camera_wait_ms = (int32_t)appParams.camWaitMs;
   p->frame_capacity = (int32_t)appParams.frameCap;
+  p->start = (int32_t)appParams.start;
   p->recovery_speed = (double)appParams.recoverySpeed;
   p->return_tolerance_m = (double)appParams.returnTol;
   p->merge_radius_m = (double)appParams.mergeRadius;
@@ -141,6 +143,7 @@ void foranavParamsFromCore(const NavParams* p) {
   appParams.linkLandMs = (uint16_t)p->link_land_ms;
   appParams.camWaitMs = (uint16_t)p->camera_wait_ms;
   appParams.frameCap = (uint8_t)p->frame_capacity;
+  appParams.start = (uint8_t)p->start;
   appParams.recoverySpeed = (float)p->recovery_speed;
   appParams.returnTol = (float)p->return_tolerance_m;
   appParams.mergeRadius = (float)p->merge_radius_m;
@@ -276,6 +279,10 @@ PARAM_ADD(PARAM_UINT16, camWaitMs, &appParams.camWaitMs)
  * @brief detections kept per frame; more before the frame's MARK STOP are dropped (LOG frameOverflow) (-)
  */
 PARAM_ADD(PARAM_UINT8, frameCap, &appParams.frameCap)
+/**
+ * @brief 0: after its deck checks the app waits on the ground, motors off, until a client writes 1 (then take-off 3 s later); 1 (default): it starts by itself (-)
+ */
+PARAM_ADD(PARAM_UINT8, start, &appParams.start)
 /**
  * @brief speed when re-approaching s_t (m/s)
  */

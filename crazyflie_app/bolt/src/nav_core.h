@@ -117,6 +117,7 @@ typedef struct {
   int32_t link_land_ms;
   int32_t camera_wait_ms; /* used by the adapters (pre-flight camera check) */
   int32_t frame_capacity; /* used by the camera input */
+  int32_t start; /* used by the adapters: 0 = wait on the ground for a client to write app.start = 1 */
 } NavParams;
 
 typedef struct { double x, y, z, yaw_deg, vx, vy; } NavPose; /* the estimate: m, m, m, deg, m/s, m/s */

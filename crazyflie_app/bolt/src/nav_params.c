@@ -55,6 +55,7 @@ void navParamsDefaults(NavParams* p) {
   p->link_land_ms = 10000;
   p->camera_wait_ms = 20000;
   p->frame_capacity = 64;
+  p->start = 1;
 }
 
 /* A client may write any value into a PARAM: camScale and camWidth are taken at the nearest value the model can

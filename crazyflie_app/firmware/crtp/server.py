@@ -10,8 +10,11 @@ tick clock and ``cf.x_task_create``.
 The client is the address of the latest request that was not a keep-alive (a null packet or an echo, which are
 answered whoever sends them: cflib's scan probes with a null packet). A client that has sent nothing for
 ``CLIENT_TIMEOUT_S`` (the firmware's radio activity timeout) is gone: its log blocks are deleted, as the
-firmware's logReset when the link drops. A new client also starts with no blocks (cflib resets the log on
-connect anyway). Replies go to whoever asked; log data and console text go to the client.
+firmware's logReset when the link drops. Replies go to whoever asked; log data and console text go to the
+client. The log blocks are the Crazyflie's, not a client's: the firmware has one link and no notion of who
+is on it, so a second client's request changes where the data go (as the SITL socket link answers whoever
+spoke last) but deletes nothing; the log reset that cflib sends when it connects deletes every block, the
+first client's too, as on a Crazyflie (docs/crtp.md, "A second client").
 
 The clock. Without a client the task only looks at the socket every ``CRTP_POLL_MS`` of simulated time and
 never waits, so a flight's outputs are the same bytes as without the server. With a client, in lockstep:
@@ -223,8 +226,7 @@ class CrtpServer:
     # -- the client -----------------------------------------------------------------------------------------
 
     def _new_client(self, address: Address) -> None:
-        self.client = address
-        self.log.reset()
+        self.client = address  # the downlink follows; the blocks stay (the firmware's log is one for all)
         self.stats.connections += 1
 
     def _check_client(self) -> None:

@@ -68,7 +68,8 @@ def test_that_a_null_probe_is_answered_without_taking_the_link(client):
     assert server.stats.connections == 1
 
 
-def test_that_a_new_client_starts_without_the_old_ones_blocks(client):
+def test_that_a_second_client_takes_the_downlink_and_only_a_log_reset_deletes_the_blocks(client):
+    # as the firmware: one link, one set of log blocks; cflib's connect sends the reset (log port, control 5)
     cf, server = _served()
     first, second = client(), client()
     try:
@@ -76,11 +77,18 @@ def test_that_a_new_client_starts_without_the_old_ones_blocks(client):
             first.sendto(datagram, server.address)
         cf.run_until(20)
         assert len(server.log.blocks) == 1
+        assert _drain(first)  # the block's data (and the answers) went to the first client
         second.sendto(bytes([0xD1, 0]), server.address)  # asks the protocol version
-        cf.run_until(40)
+        cf.run_until(300)
+        assert server.client == second.getsockname() and len(server.log.blocks) == 1
+        to_second = _drain(second)
+        assert any(datagram[0] == 0x52 for datagram in to_second)  # log data (port 5, channel 2) now go there
+        assert not any(datagram[0] == 0x52 for datagram in _drain(first))
+        second.sendto(bytes([0x51, 5]), server.address)  # CONTROL_RESET
+        cf.run_until(320)
     finally:
         server.close()
-    assert server.client == second.getsockname() and not server.log.blocks
+    assert not server.log.blocks
 
 
 def _drain(sock) -> list[bytes]:
