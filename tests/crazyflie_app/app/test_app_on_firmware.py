@@ -102,7 +102,7 @@ def test_that_every_param_is_documented_with_units_and_paper_defaults():
     for entry in PARAM_TABLE.entries:
         assert entry.doc, entry.name
         assert entry.unit or entry.name in ("columnFactor", "minHits", "treeCapacity", "visitedCap", "frameCap",
-                                            "servoKiBand", "anchorMin", "anchorGain"), entry.name
+                                            "servoKiBand", "anchorMin", "anchorGain", "start"), entry.name
     read = cf.registry.param_read
     assert read("app.altitude") == pytest.approx(1.25)
     assert read("app.cruiseSpeed") <= 0.1 + 1e-9
