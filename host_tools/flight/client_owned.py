@@ -42,6 +42,25 @@ from host_tools.maps import load_map
 
 SPACING_M = 0.5  # between two drones on the ground
 PACE_PERIOD_MS = 10  # simulated ms between two wall-clock pacing points
+
+
+class WallClockPacer:
+    """A firmware task that holds simulated time to the wall clock: ``wait(seconds)`` spends the time it is
+    ahead (serving CRTP requests meanwhile); ``max_lag_s`` is how far it ever fell behind."""
+
+    def __init__(self, cf: Crazyflie, wait):
+        self.cf = cf
+        self.wait = wait
+        self.max_lag_s = 0.0
+
+    def task(self):
+        wall0 = time.monotonic()
+        while True:
+            ahead = wall0 + self.cf.x_task_get_tick_count() / 1000.0 - time.monotonic()
+            if ahead > 0:
+                self.wait(ahead)
+            self.max_lag_s = max(self.max_lag_s, -ahead)
+            yield v_task_delay(PACE_PERIOD_MS)
 TELEMETRY_PERIOD_MS = 100
 HEARTBEAT_PERIOD_MS = 1000
 RUN_CHUNK_MS = 100  # the loop looks at its stop conditions this often (simulated, = wall)
@@ -109,22 +128,11 @@ class Drone:
             self.cf.console.listeners.append(lambda tick, module, text: self.tlog.status_text(
                 tick, "%s: %s" % (module, text)))
         self.crash_reported = False
-        self.max_lag_s = 0.0
+        self.pacer = WallClockPacer(self.cf, self.server.serve_for)
 
     @property
     def uri(self) -> str:
         return self.server.uri
-
-    def _pacer(self):
-        """Simulated time follows the wall clock; the server answers requests while the pacer waits."""
-        wall0 = time.monotonic()
-        while True:
-            now = self.cf.x_task_get_tick_count()
-            ahead = wall0 + now / 1000.0 - time.monotonic()
-            if ahead > 0:
-                self.server.serve_for(ahead)
-            self.max_lag_s = max(self.max_lag_s, -ahead)
-            yield v_task_delay(PACE_PERIOD_MS)
 
     def _monitor(self):
         """The tlog's telemetry and the crash report."""
@@ -156,7 +164,7 @@ class Drone:
     def run(self, stop: _Stop) -> str:
         """Serve until ``stop`` says why; -> the reason."""
         self.cf.x_task_create(self._monitor(), "DRONE_MONITOR", 0)
-        self.cf.x_task_create(self._pacer(), "DRONE_PACER", 0)
+        self.cf.x_task_create(self.pacer.task(), "DRONE_PACER", 0)
         self.server.start()
         while stop.check() is None:
             self.cf.run_until(self.cf.x_task_get_tick_count() + RUN_CHUNK_MS)
@@ -199,25 +207,15 @@ class MissionDrone:
             raise
         self.cf = self.flight.rig.cf
         self.server = self.flight.crtp
-        self.max_lag_s = 0.0
+        self.pacer = WallClockPacer(self.cf, self.flight.wait_wall)
         self.summary = None
 
     @property
     def uri(self) -> str:
         return self.server.uri
 
-    def _pacer(self):
-        """Simulated time follows the wall clock; the server answers requests while the pacer waits."""
-        wall0 = time.monotonic()
-        while True:
-            ahead = wall0 + self.cf.x_task_get_tick_count() / 1000.0 - time.monotonic()
-            if ahead > 0:
-                self.flight.wait_wall(ahead)
-            self.max_lag_s = max(self.max_lag_s, -ahead)
-            yield v_task_delay(PACE_PERIOD_MS)
-
     def run(self, stop: _Stop) -> str:
-        self.cf.x_task_create(self._pacer(), "DRONE_PACER", 0)
+        self.cf.x_task_create(self.pacer.task(), "DRONE_PACER", 0)
         self.flight.run(stop=lambda: stop.check() is not None)
         return stop.check() or "mission time limit"
 
@@ -260,7 +258,7 @@ def _serve_one(spec: DroneSpec) -> int:
     print(json.dumps({"stopped": reason, "uri": uri, "sim_s": drone.cf.x_task_get_tick_count() / 1000.0,
                       "connections": stats.connections, "crashed": drone.cf.model.crashed,
                       "crash": drone.cf.model.crash_reason, "stream_dropped": stats.stream_dropped,
-                      "max_lag_s": round(drone.max_lag_s, 3),
+                      "max_lag_s": round(drone.pacer.max_lag_s, 3),
                       "mission": drone.report() if spec.app is not None else None}), flush=True)
     return 0
 
